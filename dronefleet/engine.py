@@ -1,0 +1,495 @@
+"""The compiled discrete-event core.
+
+Time jumps from event to event. Each source says when its next event is and the
+earliest is processed; at equal times the order is fixed (MODEL.md leaves it open):
+
+1. UAV events (delivery or abort instant, landing, loss), lowest UAV id first;
+2. an order arrival;
+3. an advertisement tick (so a UAV landing or an order arriving at a tick takes part);
+4. a time-series sample (so it shows the state after everything at that instant).
+
+Advertisement ticks lie on the grid n * advert_interval_s and happen only while some
+UAV is idle and some order is unallocated. State of charge is never stepped: it is a
+closed form of the last landing (charging) or of the takeoff (flight), see ``energy``.
+
+The state is a handful of named tuples of arrays (structure of arrays); the loop is one
+compiled function, ``advance``, that processes every event up to a given time and can
+be called again to go on, so Python can take weekly snapshots, show progress and grow
+the attempt table between calls.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .energy import plan_attempt, soc_after_charging
+from .policy import decision, sgd_step
+from .supervisor import take
+
+# UAV modes.
+IDLE, OUTBOUND, RETURNING, LOST = 0, 1, 2, 3
+
+# Order status.
+NOT_ARRIVED, QUEUED, ALLOCATED, DELIVERED = 0, 1, 2, 3
+
+# Attempt outcomes.
+IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_ABORTED = 0, 1, 2
+OUTCOME_NAMES = ("in_flight", "delivered", "aborted")
+
+# Supervisor events the engine generates: columns of the compiled transition table.
+EVENT_NAMES = ("capableTask", "notCapableTask", "bid", "wonBid", "lostBid", "deliver", "condReturn", "return")
+EV_CAPABLE, EV_NOT_CAPABLE, EV_BID, EV_WON, EV_LOST_BID, EV_DELIVER, EV_COND_RETURN, EV_RETURN = range(8)
+
+# Status returned by ``advance``.
+DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED = 0, 1, 2
+
+# Slots of the int64 ``counters`` array (scalars the kernel updates in place).
+(NEXT_ORDER, QUEUE_LEN, LAST_ADVERTISED, NEXT_TICK, N_ATTEMPTS, NEXT_SAMPLE, N_DELIVERED, N_ABORTED,
+ N_IDLE, N_LOST, N_AUCTIONS, MAY_BID, REFUSED_UAV, REFUSED_EVENT, N_COUNTERS) = range(15)
+
+# Values of Params.bids_on (auction.BIDS_ON).
+BIDS_ON_POLICY, BIDS_ON_SOC_THRESHOLD, BIDS_ON_ANY = 0, 1, 2
+
+# Safety margins of the tick skip (see _earliest_bid): far above rounding error, far below
+# anything that matters in the model.
+F_MARGIN = 1e-9     # in decision-function units, relative
+SOC_MARGIN = 1e-12  # percent
+SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
+
+
+class Params(NamedTuple):
+    """Scalars of the model the kernel needs, in SI units and percent."""
+
+    speed_m_s: float
+    xi: float
+    charge_rate: float      # k, 1/s
+    power_empty_w: float    # flight power without parcel
+    alpha: float
+    t0: float               # Bottou's t0 of the "optimal" learning rate
+    soc_mean: float         # standardisation of the SoC feature
+    soc_std: float
+    theta: float
+    advert_interval_s: float
+    record_interval_s: float
+    bids_on: int            # BIDS_ON_* of the winner rule
+
+
+class OrderBook(NamedTuple):
+    """Orders (n,) and the queue of unallocated ones."""
+
+    arrival_s: np.ndarray
+    distance_m: np.ndarray
+    x_distance: np.ndarray  # standardised features
+    x_mass: np.ndarray
+    power_w: np.ndarray     # flight power carrying the parcel
+    status: np.ndarray      # int8, NOT_ARRIVED .. DELIVERED
+    attempts: np.ndarray    # int32
+    delivered_s: np.ndarray  # nan until delivered
+    queue: np.ndarray       # int64 ids of unallocated orders, ascending, first counters[QUEUE_LEN] valid
+
+
+class Fleet(NamedTuple):
+    """One row per UAV."""
+
+    soh: np.ndarray
+    drain: np.ndarray       # SoC percent per second per watt
+    coef: np.ndarray        # (S, 3) policy weights
+    intercept: np.ndarray
+    steps: np.ndarray       # learner step counter (scikit-learn's t_)
+    mode: np.ndarray        # int8
+    sup: np.ndarray         # (S, K) local supervisor states
+    next_s: np.ndarray      # time of the UAV's next event, inf if none
+    soc_ref: np.ndarray     # at the FC: SoC at t_ref, from which it charges
+    t_ref: np.ndarray
+    order: np.ndarray       # int64, order being flown, -1 if none
+    attempt: np.ndarray     # int64, row of the attempt being flown
+    takeoff_s: np.ndarray
+    takeoff_soc: np.ndarray
+    rate_out: np.ndarray    # SoC drain outbound, percent/s
+    turn_s: np.ndarray      # delivery or abort instant
+    turn_soc: np.ndarray
+    rate_home: np.ndarray
+    home_s: np.ndarray      # from the turn to landing, or to the loss instant
+    land_soc: np.ndarray
+    delivers: np.ndarray    # bool: this flight delivers
+    lost: np.ndarray        # bool: this flight ends in a loss
+    bidding: np.ndarray     # bool scratch of the auction being resolved
+    reach: np.ndarray       # max over queued orders of w_distance x_distance + w_mass x_mass
+    reach_stale: np.ndarray  # bool: reach must be recomputed before use
+    x_soc_best: np.ndarray  # scratch of the tick scan: most favourable standardised SoC
+
+
+class Attempts(NamedTuple):
+    """One row per delivery attempt, first counters[N_ATTEMPTS] valid."""
+
+    uav: np.ndarray
+    order: np.ndarray
+    takeoff_s: np.ndarray
+    takeoff_soc: np.ndarray
+    outcome: np.ndarray     # int8, IN_FLIGHT until the turn, then OUTCOME_DELIVERED or OUTCOME_ABORTED
+    turn_s: np.ndarray      # delivery or abort instant, nan until then
+    return_s: np.ndarray    # landing (or loss) instant, nan until then
+    return_soc: np.ndarray
+    lost: np.ndarray        # bool: the UAV did not come back
+
+
+class Series(NamedTuple):
+    """Time series sampled every record_interval_s, one row per sample."""
+
+    delivered: np.ndarray
+    unallocated: np.ndarray
+    in_flight: np.ndarray
+    aborted: np.ndarray
+    idle: np.ndarray
+    lost: np.ndarray
+
+
+@njit(cache=True)
+def soc_at(fleet, i, t, charge_rate):
+    """SoC (percent) of UAV ``i`` at time ``t`` in closed form, whatever it is doing."""
+    mode = fleet.mode[i]
+    if mode == IDLE:
+        return soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], charge_rate)
+    if mode == OUTBOUND:
+        return fleet.takeoff_soc[i] - (t - fleet.takeoff_s[i]) * fleet.rate_out[i]
+    if mode == RETURNING:
+        return fleet.turn_soc[i] - (t - fleet.turn_s[i]) * fleet.rate_home[i]
+    return np.nan
+
+
+@njit(cache=True)
+def _step(table, fleet, counters, i, event):
+    """Move UAV ``i``'s supervisor along ``event``; record the refusal and return False if not allowed."""
+    if take(table, fleet.sup, i, event):
+        return True
+    counters[REFUSED_UAV] = i
+    counters[REFUSED_EVENT] = event
+    return False
+
+
+@njit(cache=True)
+def _order_value(book, fleet, i, order):
+    """The part of UAV ``i``'s decision function that depends on the order."""
+    return fleet.coef[i, 0] * book.x_distance[order] + fleet.coef[i, 1] * book.x_mass[order]
+
+
+@njit(cache=True)
+def _enqueue(book, fleet, counters, order):
+    """Put ``order`` among the unallocated ones, at its place in arrival order."""
+    n = counters[QUEUE_LEN]
+    pos = np.searchsorted(book.queue[:n], order)
+    book.queue[pos + 1:n + 1] = book.queue[pos:n].copy()
+    book.queue[pos] = order
+    counters[QUEUE_LEN] = n + 1
+    book.status[order] = QUEUED
+    for i in range(fleet.reach.shape[0]):
+        fleet.reach[i] = max(fleet.reach[i], _order_value(book, fleet, i, order))
+
+
+@njit(cache=True)
+def _dequeue(book, fleet, counters, pos):
+    """Take the order at queue position ``pos`` out of the queue."""
+    n = counters[QUEUE_LEN]
+    order = book.queue[pos]
+    book.queue[pos:n - 1] = book.queue[pos + 1:n].copy()
+    counters[QUEUE_LEN] = n - 1
+    for i in range(fleet.reach.shape[0]):
+        if _order_value(book, fleet, i, order) >= fleet.reach[i]:
+            fleet.reach_stale[i] = True
+
+
+@njit(cache=True)
+def _earliest_bid(book, fleet, counters, params, t):
+    """A lower bound on when an idle UAV may first bid on a queued order, if nothing else happens.
+
+    Returns ``t`` if one may bid now and inf if none ever will. Idle UAVs only charge, so
+    their SoC only grows; a rule that bids on its policy (f >= 0) can bid on some order
+    once reach + b + w_soc x_soc >= 0, a threshold rule once SoC >= theta. The time to a
+    SoC is the inverse of the charging curve. Margins (F_MARGIN, SOC_MARGIN) keep the
+    bound below the first tick at which the exact per-order test can succeed.
+    """
+    earliest = np.inf
+    for i in range(fleet.mode.shape[0]):
+        if fleet.mode[i] != IDLE:
+            continue
+        soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
+        if params.bids_on == BIDS_ON_SOC_THRESHOLD:
+            need = params.theta
+        else:
+            if fleet.reach_stale[i]:
+                best = -np.inf
+                for q in range(counters[QUEUE_LEN]):
+                    best = max(best, _order_value(book, fleet, i, book.queue[q]))
+                fleet.reach[i] = best
+                fleet.reach_stale[i] = False
+            slack = fleet.reach[i] + fleet.intercept[i]
+            w_soc = fleet.coef[i, 2] / params.soc_std
+            margin = F_MARGIN * (1.0 + abs(fleet.reach[i]) + abs(fleet.intercept[i]))
+            if w_soc <= 0.0:
+                # Charging cannot make this UAV keener.
+                if slack + w_soc * (soc - params.soc_mean) >= -margin:
+                    return t
+                continue
+            need = params.soc_mean + (-slack - margin) / w_soc
+        if soc >= need:
+            return t
+        gap = 100.0 - need + SOC_MARGIN
+        if gap > 0.0:
+            earliest = min(earliest, t + np.log((100.0 - soc) / gap) / params.charge_rate)
+    return earliest
+
+
+@njit(cache=True)
+def _first_possible_tick(book, fleet, counters, params, t_tick, limit):
+    """The first tick before ``limit`` (and within SCAN_TICKS) whose order some idle UAV may bid on.
+
+    Only for rules that bid on their policy. Over the scanned ticks each idle UAV's
+    decision value for an order is at most its value at the most favourable SoC of the
+    window (the end if f grows with SoC, the start otherwise), so an order for which
+    that bound is negative for everyone has no bidder at its tick. Returns the index
+    of the first tick that may have one, or of the tick after the window.
+    """
+    interval = params.advert_interval_s
+    tick = counters[NEXT_TICK]
+    end = min(np.int64(np.ceil(min(limit, t_tick + SCAN_TICKS * interval) / interval)), tick + SCAN_TICKS)
+    t_end = end * interval
+    for i in range(fleet.mode.shape[0]):
+        if fleet.mode[i] == IDLE:
+            t_best = t_end if fleet.coef[i, 2] > 0.0 else t_tick
+            soc = soc_after_charging(fleet.soc_ref[i], t_best - fleet.t_ref[i], params.charge_rate)
+            fleet.x_soc_best[i] = (soc + SOC_MARGIN - params.soc_mean) / params.soc_std
+    n = counters[QUEUE_LEN]
+    pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
+    for j in range(end - tick):
+        order = book.queue[(pos + j) % n]
+        for i in range(fleet.mode.shape[0]):
+            if fleet.mode[i] != IDLE:
+                continue
+            value = _order_value(book, fleet, i, order)
+            f = value + fleet.intercept[i] + fleet.coef[i, 2] * fleet.x_soc_best[i]
+            if f >= -F_MARGIN * (1.0 + abs(value) + abs(fleet.intercept[i])):
+                return tick + j
+    return end
+
+
+@njit(cache=True)
+def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
+    """Jump over ticks before ``t_other`` at which provably nobody bids; True if any were skipped.
+
+    Each skipped tick still advertises (the position moves on, cyclically) and counts
+    as an auction; nothing else happens at them.
+    """
+    interval = params.advert_interval_s
+    limit = min(t_other, t_stop + interval)
+    if counters[MAY_BID] == 0:
+        limit = min(limit, _earliest_bid(book, fleet, counters, params, t_tick) - interval)
+        if limit <= t_tick:
+            counters[MAY_BID] = 1
+    if counters[MAY_BID] == 0:
+        end = np.int64(np.ceil(limit / interval))
+    elif params.bids_on == BIDS_ON_POLICY:
+        end = _first_possible_tick(book, fleet, counters, params, t_tick, limit)
+    else:
+        return False
+    skipped = end - counters[NEXT_TICK]
+    if skipped <= 0:
+        return False
+    n = counters[QUEUE_LEN]
+    pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
+    counters[LAST_ADVERTISED] = book.queue[(pos + skipped - 1) % n]
+    counters[N_AUCTIONS] += skipped
+    counters[NEXT_TICK] = end
+    return True
+
+
+@njit(cache=True)
+def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
+    """UAV ``i`` takes off with ``order`` at ``t``: its whole flight is planned in closed form."""
+    rate_out = book.power_w[order] * fleet.drain[i]
+    rate_empty = params.power_empty_w * fleet.drain[i]
+    delivers, outbound_s, turn_soc, home_s, land_soc, lost = plan_attempt(
+        soc, book.distance_m[order], params.speed_m_s, rate_out, rate_empty, params.xi)
+    row = counters[N_ATTEMPTS]
+    counters[N_ATTEMPTS] = row + 1
+    attempts.uav[row] = i
+    attempts.order[row] = order
+    attempts.takeoff_s[row] = t
+    attempts.takeoff_soc[row] = soc
+    attempts.outcome[row] = IN_FLIGHT
+    book.status[order] = ALLOCATED
+    book.attempts[order] += 1
+    fleet.mode[i] = OUTBOUND
+    fleet.order[i] = order
+    fleet.attempt[i] = row
+    fleet.takeoff_s[i] = t
+    fleet.takeoff_soc[i] = soc
+    fleet.rate_out[i] = rate_out
+    fleet.turn_s[i] = t + outbound_s
+    fleet.turn_soc[i] = turn_soc
+    fleet.rate_home[i] = rate_out if not delivers else rate_empty
+    fleet.home_s[i] = home_s
+    fleet.land_soc[i] = land_soc
+    fleet.delivers[i] = delivers
+    fleet.lost[i] = lost
+    fleet.next_s[i] = t + outbound_s
+    counters[N_IDLE] -= 1
+
+
+@njit(cache=True)
+def _uav_event(book, fleet, attempts, counters, params, table, i, t):
+    """The turn (delivery or abort), landing or loss of UAV ``i`` at ``t``. False if refused."""
+    row = fleet.attempt[i]
+    order = fleet.order[i]
+    if fleet.mode[i] == OUTBOUND:
+        attempts.turn_s[row] = t
+        if fleet.delivers[i]:
+            attempts.outcome[row] = OUTCOME_DELIVERED
+            book.status[order] = DELIVERED
+            book.delivered_s[order] = t
+            counters[N_DELIVERED] += 1
+        else:
+            attempts.outcome[row] = OUTCOME_ABORTED
+            counters[N_ABORTED] += 1
+        if not _step(table, fleet, counters, i, EV_COND_RETURN):
+            return False
+        fleet.mode[i] = RETURNING
+        fleet.next_s[i] = t + fleet.home_s[i]
+        return True
+    # RETURNING: the flight ends.
+    attempts.return_s[row] = t
+    fleet.order[i] = -1
+    fleet.next_s[i] = np.inf
+    if fleet.lost[i]:
+        attempts.lost[row] = True
+        attempts.return_soc[row] = 0.0
+        fleet.mode[i] = LOST
+        counters[N_LOST] += 1
+        if not fleet.delivers[i]:
+            _enqueue(book, fleet, counters, order)
+        return True
+    if not _step(table, fleet, counters, i, EV_RETURN):
+        return False
+    attempts.return_soc[row] = fleet.land_soc[i]
+    fleet.mode[i] = IDLE
+    fleet.soc_ref[i] = fleet.land_soc[i]
+    fleet.t_ref[i] = t
+    counters[N_IDLE] += 1
+    if not fleet.delivers[i]:
+        _enqueue(book, fleet, counters, order)
+    # One partial_fit step on what the UAV saw at takeoff and what happened.
+    sgd_step(fleet.coef, fleet.intercept, fleet.steps, i,
+             book.x_distance[order], book.x_mass[order],
+             (fleet.takeoff_soc[i] - params.soc_mean) / params.soc_std,
+             1.0 if fleet.delivers[i] else 0.0, params.alpha, params.t0)
+    fleet.reach_stale[i] = True
+    return True
+
+
+@njit(cache=True)
+def _auction(book, fleet, attempts, counters, params, table, rule, rng, t):
+    """Advertise one order at tick time ``t`` and resolve its auction. False if refused."""
+    n = counters[QUEUE_LEN]
+    pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
+    if pos == n:
+        pos = 0
+    order = book.queue[pos]
+    counters[N_AUCTIONS] += 1
+    x0 = book.x_distance[order]
+    x1 = book.x_mass[order]
+    winner = -1
+    winner_soc = 0.0
+    best = -np.inf
+    n_uavs = fleet.mode.shape[0]
+    bidder = fleet.bidding
+    for i in range(n_uavs):
+        bidder[i] = False
+        if fleet.mode[i] != IDLE:
+            continue
+        soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
+        f = decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
+        w = fleet.coef[i]
+        bids, score = rule(f, np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), soc, params.theta, rng)
+        if not bids:
+            if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
+                return False
+            continue
+        if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
+            return False
+        bidder[i] = True
+        if score >= best:  # ascending ids: ties go to the highest id
+            best = score
+            winner = i
+            winner_soc = soc
+    if winner < 0:
+        counters[LAST_ADVERTISED] = order
+        return True
+    for i in range(n_uavs):
+        if bidder[i] and i != winner and not _step(table, fleet, counters, i, EV_LOST_BID):
+            return False
+    if not (_step(table, fleet, counters, winner, EV_WON) and _step(table, fleet, counters, winner, EV_DELIVER)):
+        return False
+    # Allocated: out of the queue, and the next advertisement starts again from the oldest.
+    _dequeue(book, fleet, counters, pos)
+    counters[LAST_ADVERTISED] = -1
+    counters[MAY_BID] = 0
+    _takeoff(book, fleet, attempts, counters, params, winner, order, t, winner_soc)
+    return True
+
+
+@njit(cache=True)
+def advance(book, fleet, attempts, series, counters, params, table, rule, rng, t_stop):
+    """Process every event at or before ``t_stop`` (seconds), in the order of the module doc.
+
+    All arguments but ``params``, ``table`` (compiled supervisor, (K, states, events)
+    int64), ``rule`` (a winner rule of ``auction``) and ``rng`` (random-bid stream)
+    are updated in place. Returns DONE, ATTEMPTS_FULL (nothing was processed that needs
+    a new attempt row: grow ``attempts`` and call again) or SUPERVISOR_REFUSED (the
+    UAV and event are in ``counters``).
+    """
+    n_orders = book.arrival_s.shape[0]
+    n_samples = series.delivered.shape[0]
+    capacity = attempts.uav.shape[0]
+    interval = params.advert_interval_s
+    while True:
+        if counters[N_ATTEMPTS] == capacity:
+            return ATTEMPTS_FULL
+        uav = np.argmin(fleet.next_s)
+        t_uav = fleet.next_s[uav]
+        t_order = book.arrival_s[counters[NEXT_ORDER]] if counters[NEXT_ORDER] < n_orders else np.inf
+        t_sample = counters[NEXT_SAMPLE] * params.record_interval_s if counters[NEXT_SAMPLE] < n_samples else np.inf
+        tick = counters[NEXT_TICK]
+        advertising = counters[N_IDLE] > 0 and counters[QUEUE_LEN] > 0
+        t_tick = tick * interval if advertising else np.inf
+        t_other = min(t_uav, t_order, t_sample)
+        if (t_tick < t_other and params.bids_on != BIDS_ON_ANY
+                and _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop)):
+            continue
+        t = min(t_other, t_tick)
+        if t > t_stop:
+            return DONE
+        if t_uav == t:
+            if not _uav_event(book, fleet, attempts, counters, params, table, uav, t):
+                return SUPERVISOR_REFUSED
+        elif t_order == t:
+            order = counters[NEXT_ORDER]
+            counters[NEXT_ORDER] = order + 1
+            _enqueue(book, fleet, counters, order)
+        elif t_tick == t:
+            if not _auction(book, fleet, attempts, counters, params, table, rule, rng, t):
+                return SUPERVISOR_REFUSED
+            counters[NEXT_TICK] = tick + 1
+        else:
+            k = counters[NEXT_SAMPLE]
+            series.delivered[k] = counters[N_DELIVERED]
+            series.unallocated[k] = counters[QUEUE_LEN]
+            series.idle[k] = counters[N_IDLE]
+            series.lost[k] = counters[N_LOST]
+            series.in_flight[k] = fleet.mode.shape[0] - counters[N_IDLE] - counters[N_LOST]
+            series.aborted[k] = counters[N_ABORTED]
+            counters[NEXT_SAMPLE] = k + 1
+        if t_tick != t:
+            counters[MAY_BID] = 0  # the state changed: who may bid must be looked at again
+            # While advertising is suspended, ticks are not held: the next one is the first
+            # grid instant at or after now.
+            counters[NEXT_TICK] = max(counters[NEXT_TICK], np.int64(np.ceil(t / interval)))

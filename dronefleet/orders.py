@@ -1,0 +1,43 @@
+"""The stream of orders arriving at the fulfilment centre (MODEL.md section 1)."""
+
+from typing import NamedTuple
+
+import numpy as np
+
+#: Orders are drawn in fixed-size blocks so that the stream does not depend on the
+#: horizon: a shorter run sees exactly the first orders of a longer one.
+BLOCK = 1024
+
+
+class Orders(NamedTuple):
+    """Every order of a run, in arrival order; arrays of shape (n_orders,), float64."""
+
+    arrival_s: np.ndarray
+    distance_m: np.ndarray
+    mass_kg: np.ndarray
+
+
+def generate_orders(config, rng):
+    """Draw the orders arriving in [0, horizon) from the run's order stream ``rng``.
+
+    The first order arrives at t = 0 and gaps are Exp(tau). Mass ~ U(mass_min, mass_max);
+    distance ~ U(distance_min, distance_max) or, with ``distance_sampling = "annulus"``,
+    sqrt(U(distance_min^2, distance_max^2)).
+    """
+    horizon = config.horizon_s
+    arrivals, masses, distances = [], [], []
+    next_arrival = 0.0
+    while next_arrival < horizon:
+        gaps = rng.exponential(config.tau_s, BLOCK)
+        masses.append(rng.uniform(config.mass_min_kg, config.mass_max_kg, BLOCK))
+        if config.distance_sampling == "annulus":
+            distances.append(np.sqrt(rng.uniform(config.distance_min_m ** 2, config.distance_max_m ** 2, BLOCK)))
+        else:
+            distances.append(rng.uniform(config.distance_min_m, config.distance_max_m, BLOCK))
+        # cumsum adds sequentially: t[j+1] = t[j] + Z[j] exactly, across blocks too.
+        times = np.cumsum(np.concatenate(([next_arrival], gaps)))
+        arrivals.append(times[:-1])
+        next_arrival = times[-1]
+    arrival = np.concatenate(arrivals)
+    n = int(np.searchsorted(arrival, horizon, side="left"))
+    return Orders(arrival[:n], np.concatenate(distances)[:n], np.concatenate(masses)[:n])

@@ -1,0 +1,176 @@
+"""A run's tables (MODEL.md section 10), its metrics (section 11) and their parquet files.
+
+Every file carries the full resolved config (JSON) in its schema metadata under
+``dronefleet.config``. Files are written under a temporary name and renamed, so a
+reader never sees a truncated file; ``summary.parquet`` is written last and so marks a
+complete run.
+
+Schemas (times in seconds from the start of the run, SoC in percent, null = did not happen
+by the horizon):
+
+``orders``: order_id int32, arrival_s, arrival_week int16 (1 = first week), distance_m, mass_kg,
+attempts int16, winners list<int16> (UAVs of its attempts in order), delivered_s, delivery_time_s.
+
+``attempts``: attempt_id int32, uav int16, order_id int32, takeoff_s, takeoff_soc,
+outcome string (in_flight | delivered | aborted | lost: the UAV did not come back),
+parcel_delivered bool, turn_s (delivery or abort instant), return_s (landing or loss instant),
+return_soc.
+
+``fleet``: one row per UAV at the end of every week (and at the horizon): week int16, t_s,
+uav int16, soh, w_distance, w_mass, w_soc, intercept (policy on standardised features),
+steps (learner step counter t_), soc, lost bool.
+
+``timeseries``: t_s, delivered, unallocated, in_flight, aborted_attempts, idle, lost (int64 counts
+at that instant, after every event at it).
+
+``summary``: one row: seed, rule, tau_minutes, n_uavs, horizon_weeks, then the metrics of
+:func:`metrics`.
+"""
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from . import __version__
+from .engine import OUTCOME_DELIVERED, OUTCOME_NAMES
+
+TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
+SECONDS_PER_WEEK = 7 * 24 * 3600.0
+CONFIG_KEY = b"dronefleet.config"
+
+
+def _nullable(values):
+    return pa.array(values, from_pandas=True)  # nan -> null
+
+
+def orders_table(result):
+    o, a = result.orders, result.attempts
+    n = o["arrival_s"].shape[0]
+    by_order = np.argsort(a["order"], kind="stable")
+    offsets = np.concatenate(([0], np.cumsum(np.bincount(a["order"], minlength=n)))).astype(np.int32)
+    winners = pa.ListArray.from_arrays(pa.array(offsets), pa.array(a["uav"][by_order].astype(np.int16)))
+    return pa.table({
+        "order_id": pa.array(np.arange(n, dtype=np.int32)),
+        "arrival_s": o["arrival_s"],
+        "arrival_week": (o["arrival_s"] // SECONDS_PER_WEEK).astype(np.int16) + np.int16(1),
+        "distance_m": o["distance_m"],
+        "mass_kg": o["mass_kg"],
+        "attempts": o["attempts"].astype(np.int16),
+        "winners": winners,
+        "delivered_s": _nullable(o["delivered_s"]),
+        "delivery_time_s": _nullable(o["delivered_s"] - o["arrival_s"]),
+    })
+
+
+def attempts_table(result):
+    a = result.attempts
+    n = a["uav"].shape[0]
+    outcome = np.where(a["lost"], "lost", np.array(OUTCOME_NAMES)[a["outcome"]])
+    return pa.table({
+        "attempt_id": pa.array(np.arange(n, dtype=np.int32)),
+        "uav": a["uav"].astype(np.int16),
+        "order_id": a["order"].astype(np.int32),
+        "takeoff_s": a["takeoff_s"],
+        "takeoff_soc": a["takeoff_soc"],
+        "outcome": pa.array(outcome.tolist(), pa.string()),
+        "parcel_delivered": a["outcome"] == OUTCOME_DELIVERED,
+        "turn_s": _nullable(a["turn_s"]),
+        "return_s": _nullable(a["return_s"]),
+        "return_soc": _nullable(a["return_soc"]),
+    })
+
+
+def fleet_table(result):
+    columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
+                                     "intercept", "steps", "soc", "lost")}
+    for snap in result.snapshots:
+        s = snap["soh"].shape[0]
+        columns["week"].append(np.full(s, np.ceil(snap["t_s"] / SECONDS_PER_WEEK), np.int16))
+        columns["t_s"].append(np.full(s, snap["t_s"]))
+        columns["uav"].append(np.arange(s, dtype=np.int16))
+        for name, key in (("soh", "soh"), ("intercept", "intercept"), ("steps", "steps"), ("soc", "soc"),
+                          ("lost", "lost")):
+            columns[name].append(snap[key])
+        for j, name in enumerate(("w_distance", "w_mass", "w_soc")):
+            columns[name].append(snap["coef"][:, j])
+    return pa.table({name: np.concatenate(parts) for name, parts in columns.items()})
+
+
+def timeseries_table(result):
+    s = result.series
+    return pa.table({
+        "t_s": s["t_s"], "delivered": s["delivered"], "unallocated": s["unallocated"],
+        "in_flight": s["in_flight"], "aborted_attempts": s["aborted"], "idle": s["idle"], "lost": s["lost"],
+    })
+
+
+def metrics(result):
+    """The study's metrics of one run (MODEL.md section 11), as a dict of Python scalars.
+
+    orders_arrived, delivered, median_delivery_time_s (nan if none), attempts, aborted_attempts,
+    aborted_pct (of all attempts that reached their turn; nan if none), pending (orders not delivered
+    at the horizon), backlog_age_s (sum of horizon - arrival over those), lost_uavs, auctions.
+    """
+    o, a = result.orders, result.attempts
+    horizon = result.config.horizon_s
+    delivered = ~np.isnan(o["delivered_s"])
+    turned = a["outcome"] != 0
+    aborted = int(np.count_nonzero(a["outcome"] == 2))
+    times = o["delivered_s"][delivered] - o["arrival_s"][delivered]
+    return {
+        "orders_arrived": int(o["arrival_s"].shape[0]),
+        "delivered": int(delivered.sum()),
+        "median_delivery_time_s": float(np.median(times)) if times.size else float("nan"),
+        "attempts": int(a["uav"].shape[0]),
+        "aborted_attempts": aborted,
+        "aborted_pct": 100.0 * aborted / turned.sum() if turned.any() else float("nan"),
+        "pending": int((~delivered).sum()),
+        "backlog_age_s": float((horizon - o["arrival_s"][~delivered]).sum()),
+        "lost_uavs": int(result.snapshots[-1]["lost"].sum()),
+        "auctions": int(result.auctions),
+    }
+
+
+def summary_table(result):
+    c = result.config
+    row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,
+               horizon_weeks=c.horizon_weeks, **metrics(result))
+    return pa.table({key: [value] for key, value in row.items()})
+
+
+def tables(result):
+    """All tables of a run, by name (see the module doc for their schemas)."""
+    return {"orders": orders_table(result), "attempts": attempts_table(result), "fleet": fleet_table(result),
+            "timeseries": timeseries_table(result), "summary": summary_table(result)}
+
+
+def write_table(table, path, config):
+    """Write ``table`` to ``path`` atomically, with the resolved ``config`` in its metadata."""
+    path = Path(path)
+    table = table.replace_schema_metadata({CONFIG_KEY: config.to_json(), b"dronefleet.version": __version__})
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def write_run(result, out_dir):
+    """Write every table of ``result`` as ``out_dir/<table>.parquet``, summary last; return the paths."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    return {name: write_table(table, out_dir / f"{name}.parquet", result.config)
+            for name, table in tables(result).items()}
+
+
+def read_config(path):
+    """The resolved config embedded in a dronefleet parquet file."""
+    from .config import config_from_dict
+    import json
+
+    return config_from_dict(json.loads(pq.read_schema(path).metadata[CONFIG_KEY]))

@@ -1,0 +1,184 @@
+"""One run: build the state from a config and a seed, drive the compiled engine, collect records.
+
+Randomness comes from four separate streams spawned from the run's seed, in this
+order: orders, SoH, learners (one child per UAV), random bids. Each stream is
+consumed in a way that does not depend on the horizon, so a shorter run is exactly
+the beginning of a longer one with the same seed.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import engine
+from .auction import BIDS_ON, RULES
+from .energy import charge_rate, drain_per_watt, flight_power
+from .orders import generate_orders
+from .policy import initial_fit, optimal_init, standardise
+from .supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
+
+SECONDS_PER_WEEK = 7 * 24 * 3600.0
+
+
+@dataclass
+class RunState:
+    """Everything the engine reads and writes for one run (arrays, updated in place)."""
+
+    book: engine.OrderBook
+    fleet: engine.Fleet
+    attempts: engine.Attempts
+    series: engine.Series
+    counters: np.ndarray
+    params: engine.Params
+    table: np.ndarray
+    rule: object
+    bid_rng: np.random.Generator
+    mass_kg: np.ndarray
+
+
+@dataclass
+class RunResult:
+    """What a run recorded (MODEL.md section 10), as numpy arrays; ``records`` turns it into tables.
+
+    ``snapshots`` holds one dict of fleet arrays per week end (and at the horizon).
+    """
+
+    config: object
+    orders: dict
+    attempts: dict
+    snapshots: list
+    series: dict
+    auctions: int
+    wall_s: float = float("nan")
+
+
+def _streams(seed, n_uavs):
+    orders, soh, learners, bids = np.random.SeedSequence(seed).spawn(4)
+    return (np.random.default_rng(orders), np.random.default_rng(soh),
+            [np.random.default_rng(s) for s in learners.spawn(n_uavs)], np.random.default_rng(bids))
+
+
+def _power(config, payload_kg):
+    return flight_power(payload_kg, config.frame_mass_kg, config.battery_mass_kg, config.n_rotors,
+                        config.rotor_area_m2, config.air_density_kg_m3, config.gravity_m_s2)
+
+
+def initial_state(config, supervisor=None):
+    """The state at t = 0: orders drawn, SoH drawn, policies fitted, everyone idle and full.
+
+    ``supervisor`` is a path to a Nadzoru 2 file (default: the packaged UAV controller).
+    """
+    order_rng, soh_rng, learner_rngs, bid_rng = _streams(config.seed, config.n_uavs)
+    orders = generate_orders(config, order_rng)
+    n, s = orders.arrival_s.shape[0], config.n_uavs
+    soh = soh_rng.uniform(config.soh_min, config.soh_max, s)
+    mean, std = np.array(config.scaler_mean), np.array(config.scaler_std)
+    coef, intercept, steps = initial_fit(
+        s, mean, std, (config.distance_min_m, config.distance_max_m), (config.mass_min_kg, config.mass_max_kg),
+        config.alpha, config.initial_epochs, learner_rngs)
+    features = standardise(np.column_stack([orders.distance_m, orders.mass_kg, np.zeros(n)]), mean, std)
+
+    rule = RULES[config.rule]
+    automaton = load_supervisor(BUILTIN_CONTROLLER if supervisor is None else supervisor)
+    table = automaton.transition_table(engine.EVENT_NAMES)
+
+    book = engine.OrderBook(
+        arrival_s=orders.arrival_s, distance_m=orders.distance_m,
+        x_distance=np.ascontiguousarray(features[:, 0]), x_mass=np.ascontiguousarray(features[:, 1]),
+        power_w=_power(config, orders.mass_kg), status=np.zeros(n, np.int8), attempts=np.zeros(n, np.int32),
+        delivered_s=np.full(n, np.nan), queue=np.zeros(n, np.int64))
+    fleet = engine.Fleet(
+        soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,
+        mode=np.full(s, engine.IDLE, np.int8), sup=np.tile(automaton.init_state.astype(np.int64), (s, 1)),
+        next_s=np.full(s, np.inf), soc_ref=np.full(s, 100.0), t_ref=np.zeros(s),
+        order=np.full(s, -1, np.int64), attempt=np.full(s, -1, np.int64),
+        takeoff_s=np.zeros(s), takeoff_soc=np.zeros(s), rate_out=np.zeros(s), turn_s=np.zeros(s),
+        turn_soc=np.zeros(s), rate_home=np.zeros(s), home_s=np.zeros(s), land_soc=np.zeros(s),
+        delivers=np.zeros(s, np.bool_), lost=np.zeros(s, np.bool_), bidding=np.zeros(s, np.bool_),
+        reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), x_soc_best=np.zeros(s))
+    n_samples = int(math.floor(config.horizon_s / config.record_interval_s)) + 1
+    series = engine.Series(*(np.zeros(n_samples, np.int64) for _ in engine.Series._fields))
+    counters = np.zeros(engine.N_COUNTERS, np.int64)
+    counters[engine.LAST_ADVERTISED] = -1
+    counters[engine.N_IDLE] = s
+    params = engine.Params(
+        speed_m_s=config.speed_m_s, xi=config.xi,
+        charge_rate=charge_rate(config.capacity_wh, config.charger_power_w, config.charger_efficiency),
+        power_empty_w=float(_power(config, 0.0)), alpha=config.alpha, t0=optimal_init(config.alpha),
+        soc_mean=mean[2], soc_std=std[2], theta=config.theta,
+        advert_interval_s=config.advert_interval_s, record_interval_s=config.record_interval_s,
+        bids_on=BIDS_ON[rule.bids_on])
+    return RunState(book, fleet, _attempt_table(max(64, n)), series, counters, params, table,
+                    rule.kernel, bid_rng, orders.mass_kg)
+
+
+def _attempt_table(capacity, old=None):
+    """An empty attempt table of ``capacity`` rows, holding the rows of ``old`` if given."""
+    new = engine.Attempts(
+        uav=np.zeros(capacity, np.int32), order=np.zeros(capacity, np.int64),
+        takeoff_s=np.zeros(capacity), takeoff_soc=np.zeros(capacity), outcome=np.zeros(capacity, np.int8),
+        turn_s=np.full(capacity, np.nan), return_s=np.full(capacity, np.nan), return_soc=np.full(capacity, np.nan),
+        lost=np.zeros(capacity, np.bool_))
+    if old is not None:
+        for field, column in zip(new, old):
+            field[:column.shape[0]] = column
+    return new
+
+
+def advance(state, t_stop):
+    """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed."""
+    while True:
+        status = engine.advance(state.book, state.fleet, state.attempts, state.series, state.counters,
+                                state.params, state.table, state.rule, state.bid_rng, t_stop)
+        if status == engine.DONE:
+            return
+        if status == engine.ATTEMPTS_FULL:
+            state.attempts = _attempt_table(2 * state.attempts.uav.shape[0], state.attempts)
+            continue
+        i = int(state.counters[engine.REFUSED_UAV])
+        event = engine.EVENT_NAMES[state.counters[engine.REFUSED_EVENT]]
+        raise SupervisorError(
+            f"the supervisor does not allow event {event!r} for UAV {i} in local state(s) "
+            f"{state.fleet.sup[i].tolist()}; the engine stopped before taking it")
+
+
+def snapshot(state, t):
+    """The fleet at time ``t``: SoH, policy, learner step counter, SoC, lost flag (arrays of shape (S,))."""
+    fleet = state.fleet
+    soc = np.array([engine.soc_at(fleet, i, t, state.params.charge_rate) for i in range(fleet.soh.shape[0])])
+    return dict(t_s=t, soh=fleet.soh.copy(), coef=fleet.coef.copy(), intercept=fleet.intercept.copy(),
+                steps=fleet.steps.copy(), soc=soc, lost=fleet.mode == engine.LOST)
+
+
+def stops(horizon_s):
+    """Week ends up to the horizon, and the horizon itself: where a run pauses to take a snapshot."""
+    weeks = np.arange(1, int(horizon_s // SECONDS_PER_WEEK) + 1) * SECONDS_PER_WEEK
+    return [float(w) for w in weeks if w < horizon_s] + [float(horizon_s)]
+
+
+def simulate(config, supervisor=None, progress=None):
+    """Run the model of ``config`` (seed included) and return its :class:`RunResult`.
+
+    ``progress(t_s)`` is called at every week end if given; ``supervisor`` as in
+    :func:`initial_state`.
+    """
+    state = initial_state(config, supervisor)
+    snapshots = []
+    for t in stops(config.horizon_s):
+        advance(state, t)
+        snapshots.append(snapshot(state, t))
+        if progress is not None:
+            progress(t)
+    return collect(state, snapshots, config)
+
+
+def collect(state, snapshots, config):
+    """Turn the final state into a :class:`RunResult` (copies of the valid rows)."""
+    book, n_attempts = state.book, int(state.counters[engine.N_ATTEMPTS])
+    attempts = {name: column[:n_attempts].copy() for name, column in zip(engine.Attempts._fields, state.attempts)}
+    orders = dict(arrival_s=book.arrival_s, distance_m=book.distance_m, mass_kg=state.mass_kg,
+                  attempts=book.attempts, delivered_s=book.delivered_s)
+    series = {name: column for name, column in zip(engine.Series._fields, state.series)}
+    series["t_s"] = np.arange(state.series.delivered.shape[0]) * config.record_interval_s
+    return RunResult(config, orders, attempts, snapshots, series, int(state.counters[engine.N_AUCTIONS]))

@@ -64,15 +64,18 @@ def _power(config, payload_kg):
                         config.rotor_area_m2, config.air_density_kg_m3, config.gravity_m_s2)
 
 
-def initial_state(config, supervisor=None):
+def initial_state(config, supervisor=None, orders=None, soh=None):
     """The state at t = 0: orders drawn, SoH drawn, policies fitted, everyone idle and full.
 
     ``supervisor`` is a path to a Nadzoru 2 file (default: the packaged UAV controller).
+    ``orders`` (an :class:`~dronefleet.orders.Orders`) and ``soh`` ((n_uavs,) array) replace
+    the drawn ones, for hand-made scenarios; the streams are split the same way regardless.
     """
     order_rng, soh_rng, learner_rngs, bid_rng = _streams(config.seed, config.n_uavs)
-    orders = generate_orders(config, order_rng)
+    drawn_soh = soh_rng.uniform(config.soh_min, config.soh_max, config.n_uavs)
+    soh = drawn_soh if soh is None else np.asarray(soh, dtype=np.float64)
+    orders = generate_orders(config, order_rng) if orders is None else orders
     n, s = orders.arrival_s.shape[0], config.n_uavs
-    soh = soh_rng.uniform(config.soh_min, config.soh_max, s)
     mean, std = np.array(config.scaler_mean), np.array(config.scaler_std)
     coef, intercept, steps = initial_fit(
         s, mean, std, (config.distance_min_m, config.distance_max_m), (config.mass_min_kg, config.mass_max_kg),
@@ -157,13 +160,13 @@ def stops(horizon_s):
     return [float(w) for w in weeks if w < horizon_s] + [float(horizon_s)]
 
 
-def simulate(config, supervisor=None, progress=None):
+def simulate(config, supervisor=None, progress=None, orders=None, soh=None):
     """Run the model of ``config`` (seed included) and return its :class:`RunResult`.
 
-    ``progress(t_s)`` is called at every week end if given; ``supervisor`` as in
-    :func:`initial_state`.
+    ``progress(t_s)`` is called at every week end if given; ``supervisor``, ``orders`` and
+    ``soh`` as in :func:`initial_state`.
     """
-    state = initial_state(config, supervisor)
+    state = initial_state(config, supervisor, orders, soh)
     snapshots = []
     for t in stops(config.horizon_s):
         advance(state, t)

@@ -12,9 +12,12 @@ highest score wins and ties go to the highest UAV id, so every bidder can
 evaluate the outcome locally. A rule that wants the lowest value to win
 returns its negation as the score.
 
-Adding a rule: write the compiled function and ``register`` it under a name,
-saying when it bids. The engine uses that to jump over advertisement ticks at
-which provably nobody can bid (the result is the same as evaluating every tick):
+Adding a rule: write the compiled function, give it the next code in ``RULES``
+(saying when it bids) and a branch in ``bid``. The dispatch is static code because
+numba's disk cache cannot key a kernel on a function passed as argument (every new
+process would recompile the engine). ``bids_on`` lets the engine jump over
+advertisement ticks at which provably nobody can bid (the result is the same as
+evaluating every tick):
 
 - ``"policy"``: the rule bids exactly when f >= 0;
 - ``"soc_threshold"``: it bids exactly when SoC >= theta;
@@ -61,25 +64,28 @@ def threshold(f, w_norm, soc, theta, rng):
 
 
 class Rule(NamedTuple):
-    """A registered winner rule: its compiled function and when it bids (a key of ``BIDS_ON``)."""
+    """A registered winner rule: its code in ``bid``, its kernel and when it bids (a key of ``BIDS_ON``)."""
 
+    code: int
     kernel: object
     bids_on: str
 
 
-RULES = {}
+RULES = {
+    "least_confident": Rule(0, least_confident, "policy"),
+    "most_confident": Rule(1, most_confident, "policy"),
+    "random": Rule(2, random, "policy"),
+    "threshold": Rule(3, threshold, "soc_threshold"),
+}
 
 
-def register(name, kernel, bids_on="policy"):
-    """Make the compiled ``kernel`` available as ``auction.rule = name`` in configs."""
-    if not hasattr(kernel, "py_func"):
-        raise TypeError(f"winner rule {name!r} must be a numba-compiled function (@njit)")
-    if bids_on not in BIDS_ON:
-        raise ValueError(f"bids_on of winner rule {name!r} must be one of {sorted(BIDS_ON)}, got {bids_on!r}")
-    RULES[name] = Rule(kernel, bids_on)
-
-
-register("least_confident", least_confident)
-register("most_confident", most_confident)
-register("random", random)
-register("threshold", threshold, bids_on="soc_threshold")
+@njit(cache=True)
+def bid(rule, f, w_norm, soc, theta, rng):
+    """Whether a UAV bids and its score under the rule with code ``rule`` (see ``RULES``)."""
+    if rule == 0:
+        return least_confident(f, w_norm, soc, theta, rng)
+    if rule == 1:
+        return most_confident(f, w_norm, soc, theta, rng)
+    if rule == 2:
+        return random(f, w_norm, soc, theta, rng)
+    return threshold(f, w_norm, soc, theta, rng)

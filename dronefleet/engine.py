@@ -23,6 +23,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from .auction import bid
 from .energy import plan_attempt, soc_after_charging
 from .policy import decision, sgd_step
 from .supervisor import take
@@ -72,6 +73,7 @@ class Params(NamedTuple):
     theta: float
     advert_interval_s: float
     record_interval_s: float
+    rule: int               # code of the winner rule (auction.RULES)
     bids_on: int            # BIDS_ON_* of the winner rule
 
 
@@ -387,7 +389,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
 
 
 @njit(cache=True)
-def _auction(book, fleet, attempts, counters, params, table, rule, rng, t):
+def _auction(book, fleet, attempts, counters, params, table, rng, t):
     """Advertise one order at tick time ``t`` and resolve its auction. False if refused."""
     n = counters[QUEUE_LEN]
     pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
@@ -409,7 +411,7 @@ def _auction(book, fleet, attempts, counters, params, table, rule, rng, t):
         soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
         f = decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
         w = fleet.coef[i]
-        bids, score = rule(f, np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), soc, params.theta, rng)
+        bids, score = bid(params.rule, f, np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), soc, params.theta, rng)
         if not bids:
             if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
                 return False
@@ -438,12 +440,11 @@ def _auction(book, fleet, attempts, counters, params, table, rule, rng, t):
 
 
 @njit(cache=True)
-def advance(book, fleet, attempts, series, counters, params, table, rule, rng, t_stop):
+def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop):
     """Process every event at or before ``t_stop`` (seconds), in the order of the module doc.
 
     All arguments but ``params``, ``table`` (compiled supervisor, (K, states, events)
-    int64), ``rule`` (a winner rule of ``auction``) and ``rng`` (random-bid stream)
-    are updated in place. Returns DONE, ATTEMPTS_FULL (nothing was processed that needs
+    int64) and ``rng`` (random-bid stream) are updated in place. Returns DONE, ATTEMPTS_FULL (nothing was processed that needs
     a new attempt row: grow ``attempts`` and call again) or SUPERVISOR_REFUSED (the
     UAV and event are in ``counters``).
     """
@@ -476,7 +477,7 @@ def advance(book, fleet, attempts, series, counters, params, table, rule, rng, t
             counters[NEXT_ORDER] = order + 1
             _enqueue(book, fleet, counters, order)
         elif t_tick == t:
-            if not _auction(book, fleet, attempts, counters, params, table, rule, rng, t):
+            if not _auction(book, fleet, attempts, counters, params, table, rng, t):
                 return SUPERVISOR_REFUSED
             counters[NEXT_TICK] = tick + 1
         else:

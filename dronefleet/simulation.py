@@ -32,7 +32,6 @@ class RunState:
     counters: np.ndarray
     params: engine.Params
     table: np.ndarray
-    rule: object
     bid_rng: np.random.Generator
     mass_kg: np.ndarray
 
@@ -111,9 +110,9 @@ def initial_state(config, supervisor=None, orders=None, soh=None):
         power_empty_w=float(_power(config, 0.0)), alpha=config.alpha, t0=optimal_init(config.alpha),
         soc_mean=mean[2], soc_std=std[2], theta=config.theta,
         advert_interval_s=config.advert_interval_s, record_interval_s=config.record_interval_s,
-        bids_on=BIDS_ON[rule.bids_on])
+        rule=rule.code, bids_on=BIDS_ON[rule.bids_on])
     return RunState(book, fleet, _attempt_table(max(64, n)), series, counters, params, table,
-                    rule.kernel, bid_rng, orders.mass_kg)
+                    bid_rng, orders.mass_kg)
 
 
 def _attempt_table(capacity, old=None):
@@ -133,7 +132,7 @@ def advance(state, t_stop):
     """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed."""
     while True:
         status = engine.advance(state.book, state.fleet, state.attempts, state.series, state.counters,
-                                state.params, state.table, state.rule, state.bid_rng, t_stop)
+                                state.params, state.table, state.bid_rng, t_stop)
         if status == engine.DONE:
             return
         if status == engine.ATTEMPTS_FULL:

@@ -1,0 +1,53 @@
+"""Benchmark of the paper scenario: ``python -m dronefleet.bench [--runs N] [--warm]``.
+
+Prints the compile time (the engine compiled into a fresh, empty numba cache unless
+``--warm``), wall seconds per 8-week run after compilation (median, min, max over
+``--runs`` seeds), advertisements (auctions) per second and the process's peak
+resident memory. It asserts nothing: machines are noisy, read the figures.
+"""
+
+import argparse
+import os
+import resource
+import statistics
+import sys
+import tempfile
+import time
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m dronefleet.bench", description=__doc__)
+    parser.add_argument("--runs", type=int, default=5, help="timed runs after compilation (default 5)")
+    parser.add_argument("--warm", action="store_true", help="use the existing numba cache instead of compiling")
+    args = parser.parse_args(argv)
+    if not args.warm:
+        # Must be set before numba is imported.
+        os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="dronefleet-bench-")
+
+    from .config import default_config, replace
+    from .simulation import simulate
+
+    config = default_config()  # 25 UAVs, 8 weeks, tau = 15 min, least_confident
+    start = time.perf_counter()
+    simulate(replace(config, horizon_weeks=1.0))
+    compile_s = time.perf_counter() - start
+
+    walls, auctions = [], []
+    for seed in range(args.runs):
+        start = time.perf_counter()
+        result = simulate(replace(config, seed=seed))
+        walls.append(time.perf_counter() - start)
+        auctions.append(result.auctions)
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+
+    print(f"scenario: {config.n_uavs} UAVs, {config.horizon_weeks:g} weeks, tau = {config.tau_minutes:g} min, "
+          f"{config.rule}; {args.runs} runs (seeds 0..{args.runs - 1}), Python {sys.version.split()[0]}")
+    print(f"compile time ({'warm cache' if args.warm else 'cold cache'}): {compile_s:.1f} s")
+    print(f"wall s per run: median {statistics.median(walls):.3f}, min {min(walls):.3f}, max {max(walls):.3f}")
+    print(f"auctions per second: {statistics.median(a / w for a, w in zip(auctions, walls)):.3e} "
+          f"({statistics.median(auctions):.0f} auctions per run)")
+    print(f"peak memory (max RSS of the process): {peak_mb:.0f} MB")
+
+
+if __name__ == "__main__":
+    main()

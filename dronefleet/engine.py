@@ -283,11 +283,13 @@ def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     as an auction; nothing else happens at them.
     """
     interval = params.advert_interval_s
-    limit = min(t_other, t_stop + interval)
+    # Only ticks at or before t_stop, so a paused run holds exactly the state at t_stop.
+    limit = min(t_other, (np.floor(t_stop / interval) + 1.0) * interval)
     if counters[MAY_BID] == 0:
-        limit = min(limit, _earliest_bid(book, fleet, counters, params, t_tick) - interval)
-        if limit <= t_tick:
+        earliest = _earliest_bid(book, fleet, counters, params, t_tick) - interval
+        if earliest <= t_tick:
             counters[MAY_BID] = 1
+        limit = min(limit, earliest)
     if counters[MAY_BID] == 0:
         end = np.int64(np.ceil(limit / interval))
     elif params.bids_on == BIDS_ON_POLICY:

@@ -18,7 +18,7 @@ return_soc.
 
 ``fleet``: one row per UAV at the end of every week (and at the horizon): week int16, t_s,
 uav int16, soh, w_distance, w_mass, w_soc, intercept (policy on standardised features),
-steps (learner step counter t_), soc, lost bool.
+steps (learner step counter t_), soc (null once lost), lost bool.
 
 ``timeseries``: t_s, delivered, unallocated, in_flight, aborted_attempts, idle, lost (int64 counts
 at that instant, after every event at it).
@@ -96,7 +96,9 @@ def fleet_table(result):
             columns[name].append(snap[key])
         for j, name in enumerate(("w_distance", "w_mass", "w_soc")):
             columns[name].append(snap["coef"][:, j])
-    return pa.table({name: np.concatenate(parts) for name, parts in columns.items()})
+    table = {name: np.concatenate(parts) for name, parts in columns.items()}
+    table["soc"] = _nullable(table["soc"])  # a lost UAV has none
+    return pa.table(table)
 
 
 def timeseries_table(result):

@@ -1,0 +1,111 @@
+"""Shared helpers of the model tests: MODEL.md physics by hand, hand-made scenarios, forced policies.
+
+Everything "expected" in the tests is computed from the formulas of MODEL.md here, in plain
+Python, never with the engine's own functions.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from dronefleet import auction, config as cfg, simulation
+from dronefleet.orders import Orders
+
+WEEK = 7 * 24 * 3600.0
+DELTA = 2.0  # advertising period of MODEL.md section 4
+
+# MODEL.md section 2, default parameters.
+G, M_FRAME, M_BATTERY, N_ROTORS, ZETA, RHO = 9.81, 10.0, 10.0, 8, 0.27, 1.225
+SPEED, CAPACITY, P_CHARGER, GAMMA = 10.0, 800.0, 100.0, 0.95
+K = GAMMA * P_CHARGER / (3600.0 * CAPACITY)  # 1/s
+MU = (3500.0, 2.75, 50.0)
+SIGMA = (1443.38, 1.298, 28.87)
+
+
+def power(payload_kg):
+    """P(m_p) of MODEL.md section 2, W."""
+    return (G * (M_FRAME + M_BATTERY + payload_kg)) ** 1.5 / math.sqrt(2.0 * N_ROTORS * RHO * ZETA)
+
+
+def rate(payload_kg, soh=1.0):
+    """SoC drain in flight, percent per second."""
+    return 100.0 * power(payload_kg) / (3600.0 * CAPACITY * soh)
+
+
+def charged(soc0, seconds):
+    """Closed form of the charging curve."""
+    return 100.0 - (100.0 - soc0) * math.exp(-K * seconds)
+
+
+def next_grid(t):
+    """First advertising instant at or after ``t``."""
+    return math.ceil(t / DELTA) * DELTA
+
+
+def x_std(d, m, soc):
+    return ((d - MU[0]) / SIGMA[0], (m - MU[1]) / SIGMA[1], (soc - MU[2]) / SIGMA[2])
+
+
+# Forced policies (coef on standardised [d, m, SoC], intercept). The weights are not zero so
+# that ||w|| > 0; the intercept is large enough that a few learning steps cannot flip the sign.
+ALWAYS = ((0.0, 0.0, 1.0), 1e3)     # bids on everything; f = 1000 + x_soc
+NEVER = ((0.0, 0.0, 1.0), -1e3)     # never bids
+SHORT_ONLY = ((-1.0, 0.0, 0.0), 0.0)  # bids iff d < 3500 m (f = -x_distance)
+
+
+def scenario_config(n_uavs=1, horizon_s=3600.0, **changes):
+    return cfg.replace(cfg.default_config(), n_uavs=n_uavs, horizon_weeks=horizon_s / WEEK, **changes)
+
+
+def scenario(config, arrival, distance, mass, soh=None, policies=None, soc=None):
+    """Initial state of a hand-made scenario.
+
+    ``policies``: one (coef, intercept) per UAV (or one for all), ``soc``: SoC at t = 0 per UAV.
+    """
+    orders = Orders(np.asarray(arrival, dtype=np.float64), np.asarray(distance, dtype=np.float64),
+                    np.asarray(mass, dtype=np.float64))
+    n = config.n_uavs
+    soh = np.ones(n) if soh is None else np.asarray(soh, dtype=np.float64)
+    state = simulation.initial_state(config, orders=orders, soh=soh)
+    if policies is not None:
+        if isinstance(policies[1], (int, float)):
+            policies = [policies] * n
+        for i, (coef, intercept) in enumerate(policies):
+            state.fleet.coef[i] = coef
+            state.fleet.intercept[i] = intercept
+    if soc is not None:
+        state.fleet.soc_ref[:] = soc
+    return state
+
+
+def run_state(state, config, t_stop=None):
+    """Advance to ``t_stop`` (default: the horizon, with weekly snapshots) and collect the result."""
+    snapshots = []
+    stops = simulation.stops(config.horizon_s) if t_stop is None else [t_stop]
+    for t in stops:
+        simulation.advance(state, t)
+        snapshots.append(simulation.snapshot(state, t))
+    return simulation.collect(state, snapshots, config)
+
+
+def attempts_list(result):
+    """Attempts as a list of dicts (plain Python values)."""
+    a = result.attempts
+    return [{k: a[k][r].item() for k in a} for r in range(a["uav"].shape[0])]
+
+
+@pytest.fixture(scope="module")
+def every_tick_rules():
+    """A copy of every built-in rule registered with bids_on="any" (no tick skip), removed after."""
+    names = {}
+    for name in ("least_confident", "most_confident", "random", "threshold"):
+        copy = name + "_every_tick"
+        # The same rule with bids_on = "any": the engine evaluates every tick.
+        auction.RULES[copy] = auction.RULES[name]._replace(bids_on="any")
+        names[name] = copy
+    yield names
+    for copy in names.values():
+        auction.RULES.pop(copy, None)
+
+

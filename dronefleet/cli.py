@@ -36,7 +36,7 @@ def _duration(seconds):
 
 
 def format_summary(m, wall_s):
-    """The run's summary as printed by ``dronefleet run`` (``m`` from ``records.metrics``)."""
+    """The run's summary as printed by ``dronefleet run`` (``m`` from ``metrics.run_metrics``)."""
     delivered_pct = 100.0 * m["delivered"] / m["orders_arrived"] if m["orders_arrived"] else float("nan")
     lines = [
         ("orders arrived", f"{m['orders_arrived']}"),
@@ -45,6 +45,7 @@ def format_summary(m, wall_s):
         ("aborted attempts", f"{m['aborted_pct']:.1f} % ({m['aborted_attempts']} of {m['attempts']})"),
         ("backlog age", f"{m['backlog_age_s'] / 86400.0:.1f} days over {m['pending']} pending orders"),
         ("lost UAVs", f"{m['lost_uavs']}"),
+        ("decision accuracy", f"{100.0 * m['decision_accuracy']:.1f} % (fleet mean at the end)"),
         ("wall time", f"{wall_s:.2f} s"),
     ]
     return "\n".join(f"  {label:<22}{value}" for label, value in lines)
@@ -55,7 +56,8 @@ def run(args):
     name = Path(args.config).stem if args.config else "paper"
     out = Path(args.out) if args.out else Path("results") / "runs" / f"{name}-seed{config.seed}"
 
-    from .records import metrics, write_run
+    from .metrics import run_metrics
+    from .records import write_run
     from .simulation import simulate
 
     print(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
@@ -65,7 +67,7 @@ def run(args):
     result = simulate(config, progress=ProgressBar(config.horizon_s))
     wall = time.perf_counter() - start
     write_run(result, out)
-    print(format_summary(metrics(result), wall))
+    print(format_summary(run_metrics(result), wall))
     print(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
     return 0
 

@@ -25,6 +25,12 @@ def flight_power(payload_kg, frame_mass_kg, battery_mass_kg, n_rotors, rotor_are
     return weight ** 1.5 / np.sqrt(2.0 * n_rotors * air_density_kg_m3 * rotor_area_m2)
 
 
+def config_power(config, payload_kg):
+    """:func:`flight_power` with the UAV parameters of a :class:`~dronefleet.config.Config`, W."""
+    return flight_power(payload_kg, config.frame_mass_kg, config.battery_mass_kg, config.n_rotors,
+                        config.rotor_area_m2, config.air_density_kg_m3, config.gravity_m_s2)
+
+
 def drain_per_watt(capacity_wh, soh):
     """SoC lost per second per watt of flight power, %/(s W), for state(s) of health ``soh``."""
     return 100.0 / (SECONDS_PER_HOUR * capacity_wh * np.asarray(soh, dtype=np.float64))

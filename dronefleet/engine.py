@@ -31,9 +31,6 @@ from .supervisor import take
 # UAV modes.
 IDLE, OUTBOUND, RETURNING, LOST = 0, 1, 2, 3
 
-# Order status.
-NOT_ARRIVED, QUEUED, ALLOCATED, DELIVERED = 0, 1, 2, 3
-
 # Attempt outcomes.
 IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_ABORTED = 0, 1, 2
 OUTCOME_NAMES = ("in_flight", "delivered", "aborted")
@@ -57,6 +54,7 @@ BIDS_ON_POLICY, BIDS_ON_SOC_THRESHOLD, BIDS_ON_ANY = 0, 1, 2
 F_MARGIN = 1e-9     # in decision-function units, relative
 SOC_MARGIN = 1e-12  # percent
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
+NO_TICK = np.int64(2 ** 62)  # a tick index after every run
 
 
 class Params(NamedTuple):
@@ -85,7 +83,6 @@ class OrderBook(NamedTuple):
     x_distance: np.ndarray  # standardised features
     x_mass: np.ndarray
     power_w: np.ndarray     # flight power carrying the parcel
-    status: np.ndarray      # int8, NOT_ARRIVED .. DELIVERED
     attempts: np.ndarray    # int32
     delivered_s: np.ndarray  # nan until delivered
     queue: np.ndarray       # int64 ids of unallocated orders, ascending, first counters[QUEUE_LEN] valid
@@ -171,6 +168,23 @@ def _step(table, fleet, counters, i, event):
 
 
 @njit(cache=True)
+def first_tick_at_or_after(t, interval):
+    """The smallest tick index k with k * interval >= t, exactly as the loop computes tick times.
+
+    ``ceil(t / interval)`` alone can be off by one when the division or the product rounds.
+    An infinite ``t`` (no such event) gives a tick index beyond any run.
+    """
+    if t == np.inf:
+        return NO_TICK
+    k = np.int64(np.ceil(t / interval))
+    while k * interval < t:
+        k += 1
+    while k > 0 and (k - 1) * interval >= t:
+        k -= 1
+    return k
+
+
+@njit(cache=True)
 def _order_value(book, fleet, i, order):
     """The part of UAV ``i``'s decision function that depends on the order."""
     return fleet.coef[i, 0] * book.x_distance[order] + fleet.coef[i, 1] * book.x_mass[order]
@@ -184,7 +198,6 @@ def _enqueue(book, fleet, counters, order):
     book.queue[pos + 1:n + 1] = book.queue[pos:n].copy()
     book.queue[pos] = order
     counters[QUEUE_LEN] = n + 1
-    book.status[order] = QUEUED
     for i in range(fleet.reach.shape[0]):
         fleet.reach[i] = max(fleet.reach[i], _order_value(book, fleet, i, order))
 
@@ -243,8 +256,8 @@ def _earliest_bid(book, fleet, counters, params, t):
 
 
 @njit(cache=True)
-def _first_possible_tick(book, fleet, counters, params, t_tick, limit):
-    """The first tick before ``limit`` (and within SCAN_TICKS) whose order some idle UAV may bid on.
+def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
+    """The first tick before tick ``end_max`` (and within SCAN_TICKS) whose order some idle UAV may bid on.
 
     Only for rules that bid on their policy. Over the scanned ticks each idle UAV's
     decision value for an order is at most its value at the most favourable SoC of the
@@ -254,8 +267,8 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, limit):
     """
     interval = params.advert_interval_s
     tick = counters[NEXT_TICK]
-    end = min(np.int64(np.ceil(min(limit, t_tick + SCAN_TICKS * interval) / interval)), tick + SCAN_TICKS)
-    t_end = end * interval
+    end = min(end_max, tick + SCAN_TICKS)
+    t_end = end * interval  # after every scanned tick
     for i in range(fleet.mode.shape[0]):
         if fleet.mode[i] == IDLE:
             t_best = t_end if fleet.coef[i, 2] > 0.0 else t_tick
@@ -283,19 +296,22 @@ def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     as an auction; nothing else happens at them.
     """
     interval = params.advert_interval_s
-    # Only ticks at or before t_stop, so a paused run holds exactly the state at t_stop.
-    limit = min(t_other, (np.floor(t_stop / interval) + 1.0) * interval)
+    # Ticks before t_other, and at or before t_stop, so that a paused run holds exactly
+    # the state at t_stop.
+    stop_end = first_tick_at_or_after(t_stop, interval)
+    if stop_end * interval == t_stop:
+        stop_end += 1
+    end = min(first_tick_at_or_after(t_other, interval), stop_end)
     if counters[MAY_BID] == 0:
         earliest = _earliest_bid(book, fleet, counters, params, t_tick) - interval
         if earliest <= t_tick:
             counters[MAY_BID] = 1
-        limit = min(limit, earliest)
-    if counters[MAY_BID] == 0:
-        end = np.int64(np.ceil(limit / interval))
-    elif params.bids_on == BIDS_ON_POLICY:
-        end = _first_possible_tick(book, fleet, counters, params, t_tick, limit)
-    else:
-        return False
+        else:
+            end = min(end, first_tick_at_or_after(earliest, interval))
+    if counters[MAY_BID] == 1:
+        if params.bids_on != BIDS_ON_POLICY:
+            return False
+        end = _first_possible_tick(book, fleet, counters, params, t_tick, end)
     skipped = end - counters[NEXT_TICK]
     if skipped <= 0:
         return False
@@ -321,7 +337,6 @@ def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
     attempts.takeoff_s[row] = t
     attempts.takeoff_soc[row] = soc
     attempts.outcome[row] = IN_FLIGHT
-    book.status[order] = ALLOCATED
     book.attempts[order] += 1
     fleet.mode[i] = OUTBOUND
     fleet.order[i] = order
@@ -349,7 +364,6 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         attempts.turn_s[row] = t
         if fleet.delivers[i]:
             attempts.outcome[row] = OUTCOME_DELIVERED
-            book.status[order] = DELIVERED
             book.delivered_s[order] = t
             counters[N_DELIVERED] += 1
         else:
@@ -495,4 +509,4 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
             counters[MAY_BID] = 0  # the state changed: who may bid must be looked at again
             # While advertising is suspended, ticks are not held: the next one is the first
             # grid instant at or after now.
-            counters[NEXT_TICK] = max(counters[NEXT_TICK], np.int64(np.ceil(t / interval)))
+            counters[NEXT_TICK] = max(counters[NEXT_TICK], first_tick_at_or_after(t, interval))

@@ -24,7 +24,7 @@ steps (learner step counter t_), soc (null once lost), lost bool.
 at that instant, after every event at it).
 
 ``summary``: one row: seed, rule, tau_minutes, n_uavs, horizon_weeks, then the metrics of
-:func:`metrics`.
+:func:`dronefleet.metrics.run_metrics`.
 """
 
 import os
@@ -36,6 +36,7 @@ import pyarrow.parquet as pq
 
 from . import __version__
 from .engine import OUTCOME_DELIVERED, OUTCOME_NAMES
+from .metrics import run_metrics
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 SECONDS_PER_WEEK = 7 * 24 * 3600.0
@@ -109,37 +110,10 @@ def timeseries_table(result):
     })
 
 
-def metrics(result):
-    """The study's metrics of one run (MODEL.md section 11), as a dict of Python scalars.
-
-    orders_arrived, delivered, median_delivery_time_s (nan if none), attempts, aborted_attempts,
-    aborted_pct (of all attempts that reached their turn; nan if none), pending (orders not delivered
-    at the horizon), backlog_age_s (sum of horizon - arrival over those), lost_uavs, auctions.
-    """
-    o, a = result.orders, result.attempts
-    horizon = result.config.horizon_s
-    delivered = ~np.isnan(o["delivered_s"])
-    turned = a["outcome"] != 0
-    aborted = int(np.count_nonzero(a["outcome"] == 2))
-    times = o["delivered_s"][delivered] - o["arrival_s"][delivered]
-    return {
-        "orders_arrived": int(o["arrival_s"].shape[0]),
-        "delivered": int(delivered.sum()),
-        "median_delivery_time_s": float(np.median(times)) if times.size else float("nan"),
-        "attempts": int(a["uav"].shape[0]),
-        "aborted_attempts": aborted,
-        "aborted_pct": 100.0 * aborted / turned.sum() if turned.any() else float("nan"),
-        "pending": int((~delivered).sum()),
-        "backlog_age_s": float((horizon - o["arrival_s"][~delivered]).sum()),
-        "lost_uavs": int(result.snapshots[-1]["lost"].sum()),
-        "auctions": int(result.auctions),
-    }
-
-
 def summary_table(result):
     c = result.config
     row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,
-               horizon_weeks=c.horizon_weeks, **metrics(result))
+               horizon_weeks=c.horizon_weeks, **run_metrics(result))
     return pa.table({key: [value] for key, value in row.items()})
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import engine
 from .auction import BIDS_ON, RULES
-from .energy import charge_rate, drain_per_watt, flight_power
+from .energy import charge_rate, config_power, drain_per_watt
 from .orders import generate_orders
 from .policy import initial_fit, optimal_init, standardise
 from .supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
@@ -58,11 +58,6 @@ def _streams(seed, n_uavs):
             [np.random.default_rng(s) for s in learners.spawn(n_uavs)], np.random.default_rng(bids))
 
 
-def _power(config, payload_kg):
-    return flight_power(payload_kg, config.frame_mass_kg, config.battery_mass_kg, config.n_rotors,
-                        config.rotor_area_m2, config.air_density_kg_m3, config.gravity_m_s2)
-
-
 def initial_state(config, supervisor=None, orders=None, soh=None):
     """The state at t = 0: orders drawn, SoH drawn, policies fitted, everyone idle and full.
 
@@ -84,11 +79,16 @@ def initial_state(config, supervisor=None, orders=None, soh=None):
     rule = RULES[config.rule]
     automaton = load_supervisor(BUILTIN_CONTROLLER if supervisor is None else supervisor)
     table = automaton.transition_table(engine.EVENT_NAMES)
+    bids_on = BIDS_ON[rule.bids_on]
+    idle = automaton.init_state
+    if np.any(table[np.arange(idle.shape[0]), idle, engine.EV_NOT_CAPABLE] != idle):
+        # Skipped ticks do not step notCapableTask; that is exact only if it is a self-loop.
+        bids_on = BIDS_ON["any"]
 
     book = engine.OrderBook(
         arrival_s=orders.arrival_s, distance_m=orders.distance_m,
         x_distance=np.ascontiguousarray(features[:, 0]), x_mass=np.ascontiguousarray(features[:, 1]),
-        power_w=_power(config, orders.mass_kg), status=np.zeros(n, np.int8), attempts=np.zeros(n, np.int32),
+        power_w=config_power(config, orders.mass_kg), attempts=np.zeros(n, np.int32),
         delivered_s=np.full(n, np.nan), queue=np.zeros(n, np.int64))
     fleet = engine.Fleet(
         soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,
@@ -107,10 +107,10 @@ def initial_state(config, supervisor=None, orders=None, soh=None):
     params = engine.Params(
         speed_m_s=config.speed_m_s, xi=config.xi,
         charge_rate=charge_rate(config.capacity_wh, config.charger_power_w, config.charger_efficiency),
-        power_empty_w=float(_power(config, 0.0)), alpha=config.alpha, t0=optimal_init(config.alpha),
+        power_empty_w=float(config_power(config, 0.0)), alpha=config.alpha, t0=optimal_init(config.alpha),
         soc_mean=mean[2], soc_std=std[2], theta=config.theta,
         advert_interval_s=config.advert_interval_s, record_interval_s=config.record_interval_s,
-        rule=rule.code, bids_on=BIDS_ON[rule.bids_on])
+        rule=rule.code, bids_on=bids_on)
     return RunState(book, fleet, _attempt_table(max(64, n)), series, counters, params, table,
                     bid_rng, orders.mass_kg)
 

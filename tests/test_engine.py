@@ -390,6 +390,21 @@ def test_supervisor_refuses_a_transition_it_does_not_allow(tmp_path):
     simulation.simulate(c)
 
 
+def test_tick_skip_is_off_when_the_idle_state_does_not_loop_on_not_capable(tmp_path):
+    # Skipped ticks do not step notCapableTask, which is exact only for a self-loop (as in S0
+    # of the packaged controller). A controller where it leaves S0 must see every tick.
+    doc = yaml.safe_load(Path(BUILTIN_CONTROLLER).read_text())
+    data = doc["sup_data"]
+    at = data.index("EV_notCapableTask")  # the first state's (S0) transition on it
+    assert data[at + 1:at + 3] == [0, 0]
+    data[at + 2] = 1
+    path = tmp_path / "leaves-s0.yaml"
+    path.write_text(yaml.safe_dump(doc, default_flow_style=None))
+    c = scenario_config(n_uavs=2)
+    assert simulation.initial_state(c).params.bids_on == engine.BIDS_ON_POLICY
+    assert simulation.initial_state(c, supervisor=path).params.bids_on == engine.BIDS_ON_ANY
+
+
 @pytest.mark.parametrize("xi,n_uavs", [(0.5, 25), (0.3, 25)])
 def test_supervisor_state_matches_mode(xi, n_uavs):
     c = cfg.replace(cfg.default_config(), horizon_weeks=1.0, xi=xi, n_uavs=n_uavs, seed=5)

@@ -8,6 +8,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import ALWAYS, NEVER, WEEK, rate, run_state, scenario, scenario_config
+from dronefleet.metrics import run_metrics
 from dronefleet import config as cfg, records, simulation
 
 SCHEMAS = {
@@ -26,7 +27,7 @@ SCHEMAS = {
 }
 SUMMARY_HEAD = ["seed", "rule", "tau_minutes", "n_uavs", "horizon_weeks"]
 METRICS = ["orders_arrived", "delivered", "median_delivery_time_s", "attempts", "aborted_attempts",
-           "aborted_pct", "pending", "backlog_age_s", "lost_uavs", "auctions"]
+           "aborted_pct", "pending", "backlog_age_s", "lost_uavs", "auctions", "decision_accuracy"]
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +121,7 @@ def test_metrics_on_a_tiny_scenario():
     t_abort = 1400.0 + 0.5 * land1 / rate(5.0)
     assert t_abort < T < t_abort + (t_abort - 1400.0)
     r = run_state(st, c)
-    m = records.metrics(r)
+    m = run_metrics(r)
     assert m["orders_arrived"] == 4
     assert m["delivered"] == 2
     assert m["median_delivery_time_s"] == pytest.approx((100.0 + 790.0) / 2, rel=1e-12)
@@ -166,7 +167,7 @@ def test_backlog_and_pending_by_arrival_week():
     arrivals = [0.0, WEEK - 1.0, WEEK, 1.5 * WEEK]
     st = scenario(c, arrivals, [2000.0] * 4, [1.0] * 4, policies=NEVER)
     r = run_state(st, c)
-    m = records.metrics(r)
+    m = run_metrics(r)
     assert m["delivered"] == 0 and m["pending"] == 4 and m["attempts"] == 0
     assert math.isnan(m["median_delivery_time_s"]) and math.isnan(m["aborted_pct"])
     assert m["backlog_age_s"] == pytest.approx(sum(T - a for a in arrivals), rel=1e-12)

@@ -1,0 +1,107 @@
+"""The study's metrics (MODEL.md section 11), vectorised over a run's arrays."""
+
+import numpy as np
+import pandas as pd
+
+from .energy import capable, config_power, drain_per_watt
+from .engine import OUTCOME_ABORTED
+from .policy import standardise
+
+SECONDS_PER_WEEK = 7 * 24 * 3600.0
+
+#: Child of the run's SeedSequence that draws the accuracy test points. The simulation
+#: uses children 0-3, so evaluating a policy never changes a run.
+EVALUATION_STREAM = 4
+
+
+def run_metrics(result):
+    """The metrics of one run, as a dict of Python scalars.
+
+    orders_arrived; delivered; median_delivery_time_s (arrival to delivery, nan if none);
+    attempts; aborted_attempts (attempts whose parcel turned back, whether or not the UAV
+    came home); aborted_pct (of all attempts, nan if none); pending (orders not delivered by
+    the horizon); backlog_age_s (sum of horizon - arrival over them); lost_uavs; auctions;
+    decision_accuracy (fleet mean at the horizon, see :func:`decision_accuracy`).
+    """
+    o, a, config = result.orders, result.attempts, result.config
+    delivered = ~np.isnan(o["delivered_s"])
+    times = o["delivered_s"][delivered] - o["arrival_s"][delivered]
+    attempts = a["uav"].shape[0]
+    aborted = int(np.count_nonzero(a["outcome"] == OUTCOME_ABORTED))
+    final = result.snapshots[-1]
+    return {
+        "orders_arrived": int(o["arrival_s"].shape[0]),
+        "delivered": int(delivered.sum()),
+        "median_delivery_time_s": float(np.median(times)) if times.size else float("nan"),
+        "attempts": int(attempts),
+        "aborted_attempts": aborted,
+        "aborted_pct": 100.0 * aborted / attempts if attempts else float("nan"),
+        "pending": int((~delivered).sum()),
+        "backlog_age_s": float((config.horizon_s - o["arrival_s"][~delivered]).sum()),
+        "lost_uavs": int(final["lost"].sum()),
+        "auctions": int(result.auctions),
+        "decision_accuracy": float(decision_accuracy(final["coef"], final["intercept"], final["soh"], config).mean()),
+    }
+
+
+def by_arrival_week(arrival_s, delivered_s, horizon_s):
+    """Pending orders and backlog age at the horizon, by the week the orders arrived in.
+
+    Parameters
+    ----------
+    arrival_s, delivered_s : array_like, shape (n_orders,)
+        Arrival and delivery instants (nan or None: not delivered by the horizon).
+    horizon_s : float
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per arrival week 1..ceil(horizon / week): arrived, pending, backlog_age_s.
+    """
+    arrival = np.asarray(arrival_s, dtype=np.float64)
+    pending = np.isnan(np.asarray(delivered_s, dtype=np.float64))
+    week = (arrival // SECONDS_PER_WEEK).astype(np.int64)
+    n_weeks = int(np.ceil(horizon_s / SECONDS_PER_WEEK))
+    return pd.DataFrame({
+        "arrival_week": np.arange(1, n_weeks + 1),
+        "arrived": np.bincount(week, minlength=n_weeks),
+        "pending": np.bincount(week[pending], minlength=n_weeks),
+        "backlog_age_s": np.bincount(week[pending], weights=horizon_s - arrival[pending], minlength=n_weeks),
+    })
+
+
+def accuracy_points(config, n_points=1000):
+    """The test points of :func:`decision_accuracy`: (n_points, 3) raw [distance_m, mass_kg, soc].
+
+    d ~ U(distance range), m ~ U(mass range), SoC ~ U(0, 100), from the run's evaluation stream.
+    """
+    rng = np.random.default_rng(np.random.SeedSequence(config.seed).spawn(EVALUATION_STREAM + 1)[-1])
+    return np.column_stack([rng.uniform(config.distance_min_m, config.distance_max_m, n_points),
+                            rng.uniform(config.mass_min_kg, config.mass_max_kg, n_points),
+                            rng.uniform(0.0, 100.0, n_points)])
+
+
+def decision_accuracy(coef, intercept, soh, config, points=None):
+    """Share of test points where each policy's "bid" (f >= 0) equals ground-truth "capable".
+
+    Parameters
+    ----------
+    coef : array_like, shape (n_uavs, 3)
+        Policy weights on standardised [distance, mass, SoC].
+    intercept, soh : array_like, shape (n_uavs,)
+    config : Config
+        Physics, scaling and (for the default points) seed.
+    points : array_like, shape (n_points, 3), optional
+        Raw [distance_m, mass_kg, soc] test points; default :func:`accuracy_points`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_uavs,)
+    """
+    points = accuracy_points(config) if points is None else np.asarray(points, dtype=np.float64)
+    x = standardise(points, np.array(config.scaler_mean), np.array(config.scaler_std))
+    bids = x @ np.asarray(coef).T + np.asarray(intercept) >= 0.0
+    truth = capable(points[:, :1], points[:, 1:2], points[:, 2:], drain_per_watt(config.capacity_wh, soh),
+                    config_power(config, points[:, 1:2]), config_power(config, 0.0), config.speed_m_s, config.xi)
+    return (bids == truth).mean(axis=0)
+

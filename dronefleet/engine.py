@@ -460,9 +460,10 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
     """Process every event at or before ``t_stop`` (seconds), in the order of the module doc.
 
     All arguments but ``params``, ``table`` (compiled supervisor, (K, states, events)
-    int64) and ``rng`` (random-bid stream) are updated in place. Returns DONE, ATTEMPTS_FULL (nothing was processed that needs
-    a new attempt row: grow ``attempts`` and call again) or SUPERVISOR_REFUSED (the
-    UAV and event are in ``counters``).
+    int64) and ``rng`` (random-bid stream) are updated in place. Returns DONE,
+    ATTEMPTS_FULL (stopped before an event that needs a new attempt row: grow
+    ``attempts`` and call again) or SUPERVISOR_REFUSED (the UAV and event are in
+    ``counters``).
     """
     n_orders = book.arrival_s.shape[0]
     n_samples = series.delivered.shape[0]

@@ -5,9 +5,7 @@ import sys
 import time
 from pathlib import Path
 
-from .config import ConfigError, load_config
-
-SECONDS_PER_WEEK = 7 * 24 * 3600.0
+from .config import SECONDS_PER_WEEK, ConfigError, load_config
 
 
 class ProgressBar:

@@ -417,6 +417,10 @@ def _unknown_key_message(section: str, key: str) -> str:
             f"Allowed keys in [{section}]: {', '.join(SECTIONS[section])}")
 
 
+def _unknown_name_message(name: str) -> str:
+    return f"unknown key {name!r}{_suggest(name, PARAMETERS)}. Allowed keys: {', '.join(PARAMETERS)}"
+
+
 def _resolve_key(key: str) -> str:
     """'section.key' or a bare unique key name -> the parameter name."""
     if "." in key:
@@ -429,9 +433,7 @@ def _resolve_key(key: str) -> str:
             raise ConfigError(_unknown_key_message(section, name))
         return name
     if key not in PARAMETERS:
-        raise ConfigError(f"unknown key {key!r}{_suggest(key, PARAMETERS)}. "
-                          f"Allowed keys: {', '.join(PARAMETERS)} "
-                          f"(or section.key, sections: {', '.join(SECTIONS)})")
+        raise ConfigError(f"{_unknown_name_message(key)} (or section.key, sections: {', '.join(SECTIONS)})")
     return key
 
 
@@ -531,6 +533,5 @@ def replace(config: Config, **changes: Any) -> Config:
     """``dataclasses.replace`` with a helpful error for unknown names; validated."""
     for name in changes:
         if name not in PARAMETERS:
-            raise ConfigError(f"unknown key {name!r}{_suggest(name, PARAMETERS)}. "
-                              f"Allowed keys: {', '.join(PARAMETERS)}")
+            raise ConfigError(_unknown_name_message(name))
     return dataclasses.replace(config, **changes)

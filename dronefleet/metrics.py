@@ -3,11 +3,10 @@
 import numpy as np
 import pandas as pd
 
+from .config import SECONDS_PER_WEEK
 from .energy import capable, config_power, drain_per_watt
 from .engine import OUTCOME_ABORTED
 from .policy import standardise
-
-SECONDS_PER_WEEK = 7 * 24 * 3600.0
 
 #: Child of the run's SeedSequence that draws the accuracy test points. The simulation
 #: uses children 0-3, so evaluating a policy never changes a run.

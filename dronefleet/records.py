@@ -27,6 +27,7 @@ at that instant, after every event at it).
 :func:`dronefleet.metrics.run_metrics`.
 """
 
+import json
 import os
 from pathlib import Path
 
@@ -35,11 +36,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from . import __version__
+from .config import SECONDS_PER_WEEK, config_from_dict
 from .engine import OUTCOME_DELIVERED, OUTCOME_NAMES
 from .metrics import run_metrics
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
-SECONDS_PER_WEEK = 7 * 24 * 3600.0
 CONFIG_KEY = b"dronefleet.config"
 
 
@@ -92,9 +93,8 @@ def fleet_table(result):
         columns["week"].append(np.full(s, np.ceil(snap["t_s"] / SECONDS_PER_WEEK), np.int16))
         columns["t_s"].append(np.full(s, snap["t_s"]))
         columns["uav"].append(np.arange(s, dtype=np.int16))
-        for name, key in (("soh", "soh"), ("intercept", "intercept"), ("steps", "steps"), ("soc", "soc"),
-                          ("lost", "lost")):
-            columns[name].append(snap[key])
+        for name in ("soh", "intercept", "steps", "soc", "lost"):
+            columns[name].append(snap[name])
         for j, name in enumerate(("w_distance", "w_mass", "w_soc")):
             columns[name].append(snap["coef"][:, j])
     table = {name: np.concatenate(parts) for name, parts in columns.items()}
@@ -146,7 +146,4 @@ def write_run(result, out_dir):
 
 def read_config(path):
     """The resolved config embedded in a dronefleet parquet file."""
-    from .config import config_from_dict
-    import json
-
     return config_from_dict(json.loads(pq.read_schema(path).metadata[CONFIG_KEY]))

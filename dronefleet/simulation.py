@@ -13,12 +13,11 @@ import numpy as np
 
 from . import engine
 from .auction import BIDS_ON, RULES
+from .config import SECONDS_PER_WEEK
 from .energy import charge_rate, config_power, drain_per_watt
 from .orders import generate_orders
 from .policy import initial_fit, optimal_init, standardise
 from .supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
-
-SECONDS_PER_WEEK = 7 * 24 * 3600.0
 
 
 @dataclass
@@ -49,7 +48,6 @@ class RunResult:
     snapshots: list
     series: dict
     auctions: int
-    wall_s: float = float("nan")
 
 
 def _streams(seed, n_uavs):

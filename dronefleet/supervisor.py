@@ -95,7 +95,7 @@ class Automaton:
         """Number of transitions, summed over the supervisors."""
         return sum(len(t) for t in self.transitions)
 
-    def _event_index(self, name: str) -> int:
+    def event_index(self, name: str) -> int:
         """Index of event ``name`` (without ``EV_``); SupervisorFileError if unknown."""
         try:
             return self.events.index(name)
@@ -125,7 +125,7 @@ class Automaton:
         SupervisorFileError
             If a name is not an event of the automaton.
         """
-        columns = [self._event_index(name) for name in events]
+        columns = [self.event_index(name) for name in events]
         table = np.full((self.n_supervisors, max(self.n_states), len(columns)), -1, dtype=np.int64)
         for k, n in enumerate(self.n_states):
             for c, e in enumerate(columns):
@@ -424,14 +424,14 @@ class SupervisorVM:
         ValueError
             If ``event`` is controllable (SupervisorFileError, a ValueError, if unknown).
         """
-        e = self.automaton._event_index(event)
+        e = self.automaton.event_index(event)
         if self.automaton.controllable[e]:
             raise ValueError(f"event {event!r} is controllable; input checks are for uncontrollable events")
         self._checks[e] = check
 
     def on_event(self, event: str, callback: Callable[[], None]) -> None:
         """Register the callback run whenever ``event`` is applied (replaces any earlier one)."""
-        self._callbacks[self.automaton._event_index(event)] = callback
+        self._callbacks[self.automaton.event_index(event)] = callback
 
     def _enabled_indices(self) -> list[int]:
         rows = self._table[np.arange(self.automaton.n_supervisors), self._states[0]]  # (K, N)
@@ -462,7 +462,7 @@ class SupervisorVM:
             If a supervisor whose alphabet holds the event has no transition on
             it from its current state; then no state moves and no callback runs.
         """
-        self._apply(self.automaton._event_index(event))
+        self._apply(self.automaton.event_index(event))
 
     def step(self) -> str | None:
         """One step of the published machine.

@@ -22,10 +22,15 @@ evaluating every tick):
 - ``"policy"``: the rule bids exactly when f >= 0;
 - ``"soc_threshold"``: it bids exactly when SoC >= theta;
 - ``"any"``: anything else (every tick is evaluated).
+
+``reservation`` (MODEL.md section 9) is not a kernel of this kind: it lets a base rule
+(config ``base_rule``) resolve the immediate bids and adds reservation bids, whose
+forecast is :func:`reservation_wait`; the engine runs the two phases.
 """
 
 from typing import NamedTuple
 
+import numpy as np
 from numba import njit
 
 BIDS_ON = {"policy": 0, "soc_threshold": 1, "any": 2}
@@ -63,12 +68,39 @@ def threshold(f, w_norm, soc, theta, rng):
     return False, 0.0
 
 
+@njit(cache=True)
+def reservation_wait(f_soc, w_soc, soc, soc_mean, soc_std, charge_rate):
+    """The reservation bid of a UAV that would not bid now: its forecast wait [s], or inf.
+
+    ``f_soc`` is the UAV's decision value for the order without the SoC term (w . x~ + b
+    with the SoC feature at 0), ``w_soc`` the SoC weight (standardised feature), ``soc`` the
+    current SoC [%], ``charge_rate`` k [1/s]. The UAV needs the SoC s* with f = 0; it
+    reserves only if f grows with SoC (w_soc > 0) and s* < 100 (at s* = 100 the charging
+    curve never gets there). The wait is the inverse of the charging curve,
+    ln((100 - SoC) / (100 - s*)) / k.
+    """
+    if w_soc <= 0.0:
+        return np.inf
+    need = soc_mean - soc_std * f_soc / w_soc
+    if need >= 100.0:
+        return np.inf
+    if need <= soc:  # the caller asks only when f < 0; rounding can put s* a hair below SoC
+        return 0.0
+    return np.log((100.0 - soc) / (100.0 - need)) / charge_rate
+
+
 class Rule(NamedTuple):
-    """A registered winner rule: its code in ``bid``, its kernel and when it bids (a key of ``BIDS_ON``)."""
+    """A registered winner rule.
+
+    ``code`` selects it in ``bid``, ``kernel`` is its compiled function, ``bids_on`` (a key
+    of ``BIDS_ON``) says when it bids, and ``reserves`` marks the reservation variant,
+    which runs a base rule's kernel for the immediate bids.
+    """
 
     code: int
     kernel: object
     bids_on: str
+    reserves: bool = False
 
 
 RULES = {
@@ -76,7 +108,11 @@ RULES = {
     "most_confident": Rule(1, most_confident, "policy"),
     "random": Rule(2, random, "policy"),
     "threshold": Rule(3, threshold, "soc_threshold"),
+    "reservation": Rule(-1, reservation_wait, "policy", reserves=True),
 }
+
+#: Rules that can resolve the immediate bids of ``reservation``: those that bid on their policy.
+BASE_RULES = tuple(name for name, rule in RULES.items() if rule.bids_on == "policy" and not rule.reserves)
 
 
 @njit(cache=True)

@@ -1,4 +1,5 @@
-"""Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]``."""
+"""Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
+[--fleet FILE] [--save-fleet FILE]``."""
 
 import argparse
 import sys
@@ -44,29 +45,38 @@ def format_summary(m, wall_s):
         ("backlog age", f"{m['backlog_age_s'] / 86400.0:.1f} days over {m['pending']} pending orders"),
         ("lost UAVs", f"{m['lost_uavs']}"),
         ("decision accuracy", f"{100.0 * m['decision_accuracy']:.1f} % (fleet mean at the end)"),
-        ("wall time", f"{wall_s:.2f} s"),
     ]
+    if m["reservations_won"]:
+        lines.append(("reservations won", f"{m['reservations_won']}, median wait "
+                      f"{_duration(m['median_reservation_wait_s'])}, forecast met {m['forecast_met_pct']:.1f} %"))
+    lines.append(("wall time", f"{wall_s:.2f} s"))
     return "\n".join(f"  {label:<22}{value}" for label, value in lines)
 
 
 def run(args):
-    config = load_config(args.config, args.set, args.seed)  # refuses bad input before any work
+    overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
+    config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
     name = Path(args.config).stem if args.config else "paper"
     out = Path(args.out) if args.out else Path("results") / "runs" / f"{name}-seed{config.seed}"
 
+    from .fleet import load_fleet, save_fleet
     from .metrics import run_metrics
     from .records import write_run
     from .simulation import simulate
+
+    fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None  # refused before any work
 
     print(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
           f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
           "(the first run on a machine compiles the engine, ~15 s)", flush=True)
     start = time.perf_counter()
-    result = simulate(config, progress=ProgressBar(config.horizon_s))
+    result = simulate(config, progress=ProgressBar(config.horizon_s), fleet=fleet)
     wall = time.perf_counter() - start
     write_run(result, out)
     print(format_summary(run_metrics(result), wall))
     print(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
+    if args.save_fleet:
+        print(f"  {'saved fleet':<22}{save_fleet(result, args.save_fleet)}")
     return 0
 
 
@@ -79,6 +89,10 @@ def build_parser():
                    help="override a config key, e.g. --set tau_minutes=20 or --set auction.rule=random")
     p.add_argument("--seed", type=int, help="seed of the run (overrides run.seed)")
     p.add_argument("--out", help="output directory (default: results/runs/<config>-seed<N>)")
+    p.add_argument("--fleet", metavar="FILE",
+                   help="start from a saved fleet (parquet, '{seed}' is replaced by the seed); "
+                        "same as --set run.fleet_file=FILE")
+    p.add_argument("--save-fleet", metavar="FILE", help="save the fleet at the end of the run (parquet)")
     p.set_defaults(func=run)
     return parser
 

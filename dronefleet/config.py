@@ -121,12 +121,27 @@ class RegisteredRule:
     """One of the winner rules registered in ``dronefleet.auction.RULES``.
 
     Imported lazily so that ``config`` imports nothing heavy (and no cycle).
+    ``base`` restricts it to the rules that can resolve reservation's immediate bids.
     """
 
-    def allowed(self) -> tuple[str, ...]:
-        from .auction import RULES
+    def __init__(self, base: bool = False):
+        self.base = base
 
-        return tuple(RULES)
+    def allowed(self) -> tuple[str, ...]:
+        from .auction import BASE_RULES, RULES
+
+        return BASE_RULES if self.base else tuple(RULES)
+
+    @property
+    def refusal(self) -> str:
+        return "is not a rule that bids on its policy" if self.base else "is not a registered winner rule"
+
+
+class AnyText:
+    """Any string (a file path, say); checked where it is used."""
+
+    def allowed(self) -> None:
+        return None
 
     def __repr__(self) -> str:  # pragma: no cover - cosmetic
         return "RegisteredRule()"
@@ -138,7 +153,7 @@ class Param:
 
     section: str
     type: type            # int, float, str, or tuple (tuple of `length` floats)
-    constraint: Any       # Interval (numbers; for tuples: each element), Options, RegisteredRule
+    constraint: Any       # Interval (numbers; for tuples: each element), Options, RegisteredRule, AnyText
     doc: str
     length: int = 0       # tuples only
     name: str = ""        # filled in from the field name
@@ -180,6 +195,9 @@ class Config:
                               "operating period T [weeks]")
     record_interval_s: float = _p("run", 900.0, float, _POSITIVE,
                                   "sampling period of the recorded time series [s]")
+    fleet_file: str = _p("run", "", str, AnyText(),
+                         "saved fleet to start from (parquet; '{seed}' is replaced by the seed); "
+                         "'' = a new fleet")
     # [orders]
     tau_minutes: float = _p("orders", 15.0, float, _POSITIVE,
                             "mean inter-arrival time of orders, tau [min]")
@@ -219,6 +237,8 @@ class Config:
     # [auction]
     rule: str = _p("auction", "least_confident", str, RegisteredRule(),
                    "winner rule, a name registered in dronefleet.auction.RULES")
+    base_rule: str = _p("auction", "least_confident", str, RegisteredRule(base=True),
+                        "rule that resolves the immediate bids under 'reservation'")
     theta: float = _p("auction", 50.0, float, Interval(0, 100, "both"),
                       "SoC threshold of the 'threshold' rule [%]")
     advert_interval_s: float = _p("auction", 2.0, float, _POSITIVE,
@@ -331,9 +351,8 @@ def _check_one(p: Param, value: Any) -> Any:
             raise ConfigError(f"{q} must be a string, got {_type_name(value)} {_show(value)}",
                               [p.name])
         allowed = p.constraint.allowed()
-        if value not in allowed:
-            what = ("is not a registered winner rule" if isinstance(p.constraint, RegisteredRule)
-                    else "is not allowed")
+        if allowed is not None and value not in allowed:
+            what = getattr(p.constraint, "refusal", "is not allowed")
             raise ConfigError(f"{q} = {_show(value)} {what}{_suggest(value, allowed)}. "
                               f"Allowed: {', '.join(map(repr, allowed))}", [p.name])
         return value

@@ -23,13 +23,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .auction import bid
+from .auction import bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
 from .policy import decision, sgd_step
 from .supervisor import take
 
-# UAV modes.
-IDLE, OUTBOUND, RETURNING, LOST = 0, 1, 2, 3
+# UAV modes. RESERVED: at the FC, charging, committed to an order it takes off with later.
+IDLE, OUTBOUND, RETURNING, LOST, RESERVED = 0, 1, 2, 3, 4
 
 # Attempt outcomes.
 IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_ABORTED = 0, 1, 2
@@ -44,7 +44,8 @@ DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED = 0, 1, 2
 
 # Slots of the int64 ``counters`` array (scalars the kernel updates in place).
 (NEXT_ORDER, QUEUE_LEN, LAST_ADVERTISED, NEXT_TICK, N_ATTEMPTS, NEXT_SAMPLE, N_DELIVERED, N_ABORTED,
- N_IDLE, N_LOST, N_AUCTIONS, MAY_BID, REFUSED_UAV, REFUSED_EVENT, N_COUNTERS) = range(15)
+ N_IDLE, N_LOST, N_AUCTIONS, MAY_BID, REFUSED_UAV, REFUSED_EVENT, N_RESERVED, N_RESERVATIONS,
+ N_COUNTERS) = range(17)
 
 # Values of Params.bids_on (auction.BIDS_ON).
 BIDS_ON_POLICY, BIDS_ON_SOC_THRESHOLD, BIDS_ON_ANY = 0, 1, 2
@@ -71,8 +72,9 @@ class Params(NamedTuple):
     theta: float
     advert_interval_s: float
     record_interval_s: float
-    rule: int               # code of the winner rule (auction.RULES)
+    rule: int               # code of the winner rule (auction.RULES); under reservation, the base rule's
     bids_on: int            # BIDS_ON_* of the winner rule
+    reserves: bool          # reservation bids (MODEL.md section 9) when nobody bids immediately
 
 
 class OrderBook(NamedTuple):
@@ -113,6 +115,8 @@ class Fleet(NamedTuple):
     land_soc: np.ndarray
     delivers: np.ndarray    # bool: this flight delivers
     lost: np.ndarray        # bool: this flight ends in a loss
+    allocated_s: np.ndarray  # when the order being flown (or reserved) was allocated
+    forecast_wait_s: np.ndarray  # the winning reservation bid, nan if allocated immediately
     bidding: np.ndarray     # bool scratch of the auction being resolved
     reach: np.ndarray       # max over queued orders of w_distance x_distance + w_mass x_mass
     reach_stale: np.ndarray  # bool: reach must be recomputed before use
@@ -126,6 +130,8 @@ class Attempts(NamedTuple):
     order: np.ndarray
     takeoff_s: np.ndarray
     takeoff_soc: np.ndarray
+    allocated_s: np.ndarray  # auction won (= takeoff_s unless reserved)
+    forecast_wait_s: np.ndarray  # reservation bid (forecast wait until takeoff), nan if not reserved
     outcome: np.ndarray     # int8, IN_FLIGHT until the turn, then OUTCOME_DELIVERED or OUTCOME_ABORTED
     turn_s: np.ndarray      # delivery or abort instant, nan until then
     return_s: np.ndarray    # landing (or loss) instant, nan until then
@@ -142,13 +148,14 @@ class Series(NamedTuple):
     aborted: np.ndarray
     idle: np.ndarray
     lost: np.ndarray
+    reserved: np.ndarray
 
 
 @njit(cache=True)
 def soc_at(fleet, i, t, charge_rate):
     """SoC (percent) of UAV ``i`` at time ``t`` in closed form, whatever it is doing."""
     mode = fleet.mode[i]
-    if mode == IDLE:
+    if mode == IDLE or mode == RESERVED:
         return soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], charge_rate)
     if mode == OUTBOUND:
         return fleet.takeoff_soc[i] - (t - fleet.takeoff_s[i]) * fleet.rate_out[i]
@@ -222,7 +229,9 @@ def _earliest_bid(book, fleet, counters, params, t):
     their SoC only grows; a rule that bids on its policy (f >= 0) can bid on some order
     once reach + b + w_soc x_soc >= 0, a threshold rule once SoC >= theta. The time to a
     SoC is the inverse of the charging curve. Margins (F_MARGIN, SOC_MARGIN) keep the
-    bound below the first tick at which the exact per-order test can succeed.
+    bound below the first tick at which the exact per-order test can succeed. With
+    reservations, a UAV whose f grows with SoC can bid (reserve) as soon as f > 0 at
+    SoC 100, and then at once, since it need not wait for the charge.
     """
     earliest = np.inf
     for i in range(fleet.mode.shape[0]):
@@ -246,6 +255,10 @@ def _earliest_bid(book, fleet, counters, params, t):
                 if slack + w_soc * (soc - params.soc_mean) >= -margin:
                     return t
                 continue
+            if params.reserves:
+                if slack + w_soc * (100.0 - params.soc_mean) >= -margin:
+                    return t
+                continue
             need = params.soc_mean + (-slack - margin) / w_soc
         if soc >= need:
             return t
@@ -261,9 +274,9 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
 
     Only for rules that bid on their policy. Over the scanned ticks each idle UAV's
     decision value for an order is at most its value at the most favourable SoC of the
-    window (the end if f grows with SoC, the start otherwise), so an order for which
-    that bound is negative for everyone has no bidder at its tick. Returns the index
-    of the first tick that may have one, or of the tick after the window.
+    window (the end if f grows with SoC, the start otherwise; SoC 100 if it may reserve),
+    so an order for which that bound is negative for everyone has no bidder at its tick.
+    Returns the index of the first tick that may have one, or of the tick after the window.
     """
     interval = params.advert_interval_s
     tick = counters[NEXT_TICK]
@@ -273,6 +286,8 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
         if fleet.mode[i] == IDLE:
             t_best = t_end if fleet.coef[i, 2] > 0.0 else t_tick
             soc = soc_after_charging(fleet.soc_ref[i], t_best - fleet.t_ref[i], params.charge_rate)
+            if params.reserves and fleet.coef[i, 2] > 0.0:
+                soc = 100.0
             fleet.x_soc_best[i] = (soc + SOC_MARGIN - params.soc_mean) / params.soc_std
     n = counters[QUEUE_LEN]
     pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
@@ -325,7 +340,10 @@ def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
 
 @njit(cache=True)
 def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
-    """UAV ``i`` takes off with ``order`` at ``t``: its whole flight is planned in closed form."""
+    """UAV ``i`` takes off with ``order`` at ``t``: its whole flight is planned in closed form.
+
+    ``fleet.allocated_s[i]`` and ``fleet.forecast_wait_s[i]`` must say how it got the order.
+    """
     rate_out = book.power_w[order] * fleet.drain[i]
     rate_empty = params.power_empty_w * fleet.drain[i]
     delivers, outbound_s, turn_soc, home_s, land_soc, lost = plan_attempt(
@@ -336,6 +354,8 @@ def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
     attempts.order[row] = order
     attempts.takeoff_s[row] = t
     attempts.takeoff_soc[row] = soc
+    attempts.allocated_s[row] = fleet.allocated_s[i]
+    attempts.forecast_wait_s[row] = fleet.forecast_wait_s[i]
     attempts.outcome[row] = IN_FLIGHT
     book.attempts[order] += 1
     fleet.mode[i] = OUTBOUND
@@ -352,14 +372,20 @@ def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
     fleet.delivers[i] = delivers
     fleet.lost[i] = lost
     fleet.next_s[i] = t + outbound_s
-    counters[N_IDLE] -= 1
 
 
 @njit(cache=True)
 def _uav_event(book, fleet, attempts, counters, params, table, i, t):
-    """The turn (delivery or abort), landing or loss of UAV ``i`` at ``t``. False if refused."""
+    """The reserved takeoff, turn (delivery or abort), landing or loss of UAV ``i`` at ``t``. False if refused."""
     row = fleet.attempt[i]
     order = fleet.order[i]
+    if fleet.mode[i] == RESERVED:
+        if not _step(table, fleet, counters, i, EV_DELIVER):
+            return False
+        counters[N_RESERVED] -= 1
+        _takeoff(book, fleet, attempts, counters, params, i, order, t,
+                 soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate))
+        return True
     if fleet.mode[i] == OUTBOUND:
         attempts.turn_s[row] = t
         if fleet.delivers[i]:
@@ -405,8 +431,32 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
 
 
 @njit(cache=True)
+def _reserved_takeoff(book, fleet, params, i, order, t, wait):
+    """When UAV ``i``, reserving ``order`` at ``t`` with bid ``wait``, takes off.
+
+    At t + wait its SoC reaches the level at which its policy says "bid", up to rounding;
+    the instant is moved on by a few units in the last place until the decision computed
+    as at takeoff is >= 0, so the reserved flight never starts on a "no".
+    """
+    x0 = book.x_distance[order]
+    x1 = book.x_mass[order]
+    takeoff = t + wait
+    step = abs(takeoff) * 2.2e-16 + 1e-300
+    while True:
+        soc = soc_after_charging(fleet.soc_ref[i], takeoff - fleet.t_ref[i], params.charge_rate)
+        if decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std) >= 0.0:
+            return takeoff
+        takeoff += step
+        step *= 2.0
+
+
+@njit(cache=True)
 def _auction(book, fleet, attempts, counters, params, table, rng, t):
-    """Advertise one order at tick time ``t`` and resolve its auction. False if refused."""
+    """Advertise one order at tick time ``t`` and resolve its auction. False if refused.
+
+    Immediate bids are resolved by the rule; with reservations, only if there are none,
+    the lowest reservation bid wins (ties to the highest id) and the winner waits at the FC.
+    """
     n = counters[QUEUE_LEN]
     pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
     if pos == n:
@@ -418,6 +468,8 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
     winner = -1
     winner_soc = 0.0
     best = -np.inf
+    reserver = -1
+    best_wait = np.inf
     n_uavs = fleet.mode.shape[0]
     bidder = fleet.bidding
     for i in range(n_uavs):
@@ -425,9 +477,20 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
         if fleet.mode[i] != IDLE:
             continue
         soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
-        f = decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
+        x2 = (soc - params.soc_mean) / params.soc_std
+        f = decision(fleet.coef, fleet.intercept, i, x0, x1, x2)
         w = fleet.coef[i]
         bids, score = bid(params.rule, f, np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), soc, params.theta, rng)
+        if not bids and params.reserves:
+            wait = reservation_wait(f - w[2] * x2, w[2], soc, params.soc_mean, params.soc_std, params.charge_rate)
+            if wait < np.inf:
+                if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
+                    return False
+                bidder[i] = True
+                if wait <= best_wait:  # ascending ids: ties go to the highest id
+                    best_wait = wait
+                    reserver = i
+                continue
         if not bids:
             if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
                 return False
@@ -439,18 +502,35 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
             best = score
             winner = i
             winner_soc = soc
+    reserved = winner < 0
+    if reserved:
+        winner = reserver
     if winner < 0:
         counters[LAST_ADVERTISED] = order
         return True
     for i in range(n_uavs):
         if bidder[i] and i != winner and not _step(table, fleet, counters, i, EV_LOST_BID):
             return False
-    if not (_step(table, fleet, counters, winner, EV_WON) and _step(table, fleet, counters, winner, EV_DELIVER)):
+    if not _step(table, fleet, counters, winner, EV_WON):
         return False
     # Allocated: out of the queue, and the next advertisement starts again from the oldest.
     _dequeue(book, fleet, counters, pos)
     counters[LAST_ADVERTISED] = -1
     counters[MAY_BID] = 0
+    counters[N_IDLE] -= 1
+    fleet.allocated_s[winner] = t
+    if reserved:
+        # Stays at the FC, charging, in the supervisor's state after wonBid until takeoff.
+        fleet.mode[winner] = RESERVED
+        fleet.order[winner] = order
+        fleet.forecast_wait_s[winner] = best_wait
+        fleet.next_s[winner] = _reserved_takeoff(book, fleet, params, winner, order, t, best_wait)
+        counters[N_RESERVED] += 1
+        counters[N_RESERVATIONS] += 1
+        return True
+    if not _step(table, fleet, counters, winner, EV_DELIVER):
+        return False
+    fleet.forecast_wait_s[winner] = np.nan
     _takeoff(book, fleet, attempts, counters, params, winner, order, t, winner_soc)
     return True
 
@@ -503,7 +583,8 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
             series.unallocated[k] = counters[QUEUE_LEN]
             series.idle[k] = counters[N_IDLE]
             series.lost[k] = counters[N_LOST]
-            series.in_flight[k] = fleet.mode.shape[0] - counters[N_IDLE] - counters[N_LOST]
+            series.reserved[k] = counters[N_RESERVED]
+            series.in_flight[k] = fleet.mode.shape[0] - counters[N_IDLE] - counters[N_LOST] - counters[N_RESERVED]
             series.aborted[k] = counters[N_ABORTED]
             counters[NEXT_SAMPLE] = k + 1
         if t_tick != t:

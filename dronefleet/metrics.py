@@ -5,7 +5,7 @@ import pandas as pd
 
 from .config import SECONDS_PER_WEEK
 from .energy import capable, config_power, drain_per_watt
-from .engine import OUTCOME_ABORTED
+from .engine import IN_FLIGHT, OUTCOME_ABORTED, OUTCOME_DELIVERED
 from .policy import standardise
 
 #: Child of the run's SeedSequence that draws the accuracy test points. The simulation
@@ -20,7 +20,10 @@ def run_metrics(result):
     attempts; aborted_attempts (attempts whose parcel turned back, whether or not the UAV
     came home); aborted_pct (of all attempts, nan if none); pending (orders not delivered by
     the horizon); backlog_age_s (sum of horizon - arrival over them); lost_uavs; auctions;
-    decision_accuracy (fleet mean at the horizon, see :func:`decision_accuracy`).
+    decision_accuracy (fleet mean at the horizon, see :func:`decision_accuracy`);
+    reservations_won (auctions won by a reservation bid, flown or not); median_reservation_wait_s
+    (allocation to takeoff over reserved attempts, nan if none); forecast_met_pct (of the
+    reserved attempts whose parcel turned, the share that delivered; nan if none).
     """
     o, a, config = result.orders, result.attempts, result.config
     delivered = ~np.isnan(o["delivered_s"])
@@ -28,6 +31,8 @@ def run_metrics(result):
     attempts = a["uav"].shape[0]
     aborted = int(np.count_nonzero(a["outcome"] == OUTCOME_ABORTED))
     final = result.snapshots[-1]
+    reserved = ~np.isnan(a["forecast_wait_s"])
+    turned = reserved & (a["outcome"] != IN_FLIGHT)
     return {
         "orders_arrived": int(o["arrival_s"].shape[0]),
         "delivered": int(delivered.sum()),
@@ -40,6 +45,11 @@ def run_metrics(result):
         "lost_uavs": int(final["lost"].sum()),
         "auctions": int(result.auctions),
         "decision_accuracy": float(decision_accuracy(final["coef"], final["intercept"], final["soh"], config).mean()),
+        "reservations_won": int(result.reservations),
+        "median_reservation_wait_s": (float(np.median(a["takeoff_s"][reserved] - a["allocated_s"][reserved]))
+                                      if reserved.any() else float("nan")),
+        "forecast_met_pct": (100.0 * float(np.mean(a["outcome"][turned] == OUTCOME_DELIVERED))
+                             if turned.any() else float("nan")),
     }
 
 

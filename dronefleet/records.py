@@ -14,16 +14,21 @@ attempts int16, winners list<int16> (UAVs of its attempts in order), delivered_s
 ``attempts``: attempt_id int32, uav int16, order_id int32, takeoff_s, takeoff_soc,
 outcome string (in_flight | delivered | aborted | lost: the UAV did not come back),
 parcel_delivered bool, turn_s (delivery or abort instant), return_s (landing or loss instant),
-return_soc.
+return_soc, allocated_s (auction won), reserved bool (won by a reservation bid),
+wait_s (takeoff_s - allocated_s), forecast_wait_s (the reservation bid; null if not reserved),
+forecast_met bool (reserved attempts whose parcel has turned: whether the forecast that the
+UAV can deliver once charged held, i.e. it delivered; null otherwise).
 
 ``fleet``: one row per UAV at the end of every week (and at the horizon): week int16, t_s,
 uav int16, soh, w_distance, w_mass, w_soc, intercept (policy on standardised features),
-steps (learner step counter t_), soc (null once lost), lost bool.
+steps (learner step counter t_), soc (null once lost), lost bool, decision_accuracy
+(:func:`dronefleet.metrics.decision_accuracy` of the policy then, on the run's test points),
+period int16 (operating period: 1, or the saved fleet's plus one for a warm start).
 
-``timeseries``: t_s, delivered, unallocated, in_flight, aborted_attempts, idle, lost (int64 counts
-at that instant, after every event at it).
+``timeseries``: t_s, delivered, unallocated, in_flight, aborted_attempts, idle, lost, reserved
+(int64 counts at that instant, after every event at it).
 
-``summary``: one row: seed, rule, tau_minutes, n_uavs, horizon_weeks, then the metrics of
+``summary``: one row: seed, rule, tau_minutes, n_uavs, horizon_weeks, period, then the metrics of
 :func:`dronefleet.metrics.run_metrics`.
 """
 
@@ -37,8 +42,8 @@ import pyarrow.parquet as pq
 
 from . import __version__
 from .config import SECONDS_PER_WEEK, config_from_dict
-from .engine import OUTCOME_DELIVERED, OUTCOME_NAMES
-from .metrics import run_metrics
+from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
+from .metrics import accuracy_points, decision_accuracy, run_metrics
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 CONFIG_KEY = b"dronefleet.config"
@@ -71,6 +76,8 @@ def attempts_table(result):
     a = result.attempts
     n = a["uav"].shape[0]
     outcome = np.where(a["lost"], "lost", np.array(OUTCOME_NAMES)[a["outcome"]])
+    reserved = ~np.isnan(a["forecast_wait_s"])
+    turned = a["outcome"] != IN_FLIGHT
     return pa.table({
         "attempt_id": pa.array(np.arange(n, dtype=np.int32)),
         "uav": a["uav"].astype(np.int16),
@@ -82,12 +89,19 @@ def attempts_table(result):
         "turn_s": _nullable(a["turn_s"]),
         "return_s": _nullable(a["return_s"]),
         "return_soc": _nullable(a["return_soc"]),
+        "allocated_s": a["allocated_s"],
+        "reserved": reserved,
+        "wait_s": a["takeoff_s"] - a["allocated_s"],
+        "forecast_wait_s": _nullable(a["forecast_wait_s"]),
+        "forecast_met": pa.array(np.where(reserved & turned, a["outcome"] == OUTCOME_DELIVERED, None).tolist(),
+                                 pa.bool_()),
     })
 
 
 def fleet_table(result):
     columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
-                                     "intercept", "steps", "soc", "lost")}
+                                     "intercept", "steps", "soc", "lost", "decision_accuracy")}
+    points = accuracy_points(result.config)
     for snap in result.snapshots:
         s = snap["soh"].shape[0]
         columns["week"].append(np.full(s, np.ceil(snap["t_s"] / SECONDS_PER_WEEK), np.int16))
@@ -97,8 +111,11 @@ def fleet_table(result):
             columns[name].append(snap[name])
         for j, name in enumerate(("w_distance", "w_mass", "w_soc")):
             columns[name].append(snap["coef"][:, j])
+        columns["decision_accuracy"].append(
+            decision_accuracy(snap["coef"], snap["intercept"], snap["soh"], result.config, points))
     table = {name: np.concatenate(parts) for name, parts in columns.items()}
     table["soc"] = _nullable(table["soc"])  # a lost UAV has none
+    table["period"] = np.full(table["uav"].shape[0], result.period, np.int16)
     return pa.table(table)
 
 
@@ -107,13 +124,14 @@ def timeseries_table(result):
     return pa.table({
         "t_s": s["t_s"], "delivered": s["delivered"], "unallocated": s["unallocated"],
         "in_flight": s["in_flight"], "aborted_attempts": s["aborted"], "idle": s["idle"], "lost": s["lost"],
+        "reserved": s["reserved"],
     })
 
 
 def summary_table(result):
     c = result.config
     row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,
-               horizon_weeks=c.horizon_weeks, **run_metrics(result))
+               horizon_weeks=c.horizon_weeks, period=result.period, **run_metrics(result))
     return pa.table({key: [value] for key, value in row.items()})
 
 

@@ -4,6 +4,11 @@ Randomness comes from four separate streams spawned from the run's seed, in this
 order: orders, SoH, learners (one child per UAV), random bids. Each stream is
 consumed in a way that does not depend on the horizon, so a shorter run is exactly
 the beginning of a longer one with the same seed.
+
+A run can start from a saved fleet (``config.fleet_file``, see :mod:`dronefleet.fleet`)
+instead of a new one: its operating period is then the saved fleet's plus one, and
+its streams come from (seed, period), so a second period sees fresh orders even
+with the seed of the first.
 """
 
 import math
@@ -15,6 +20,7 @@ from . import engine
 from .auction import BIDS_ON, RULES
 from .config import SECONDS_PER_WEEK
 from .energy import charge_rate, config_power, drain_per_watt
+from .fleet import load_fleet
 from .orders import generate_orders
 from .policy import initial_fit, optimal_init, standardise
 from .supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
@@ -33,13 +39,16 @@ class RunState:
     table: np.ndarray
     bid_rng: np.random.Generator
     mass_kg: np.ndarray
+    period: int
 
 
 @dataclass
 class RunResult:
     """What a run recorded (MODEL.md section 10), as numpy arrays; ``records`` turns it into tables.
 
-    ``snapshots`` holds one dict of fleet arrays per week end (and at the horizon).
+    ``snapshots`` holds one dict of fleet arrays per week end (and at the horizon);
+    ``period`` is 1 for a new fleet, the saved fleet's period plus one for a warm start;
+    ``reservations`` counts the auctions won by a reservation bid.
     """
 
     config: object
@@ -48,30 +57,54 @@ class RunResult:
     snapshots: list
     series: dict
     auctions: int
+    reservations: int
+    period: int
 
 
-def _streams(seed, n_uavs):
-    orders, soh, learners, bids = np.random.SeedSequence(seed).spawn(4)
+#: First element of the spawn key of the streams of periods after the first (an unused child).
+PERIOD_STREAMS = 1000
+
+
+def run_seed_sequence(seed, period=1):
+    """The root of a run's random streams: the seed's, or for a later period a child of it."""
+    if period == 1:
+        return np.random.SeedSequence(seed)
+    return np.random.SeedSequence(seed, spawn_key=(PERIOD_STREAMS, period))
+
+
+def _streams(seed, n_uavs, period):
+    orders, soh, learners, bids = run_seed_sequence(seed, period).spawn(4)
     return (np.random.default_rng(orders), np.random.default_rng(soh),
             [np.random.default_rng(s) for s in learners.spawn(n_uavs)], np.random.default_rng(bids))
 
 
-def initial_state(config, supervisor=None, orders=None, soh=None):
-    """The state at t = 0: orders drawn, SoH drawn, policies fitted, everyone idle and full.
+def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
+    """The state at t = 0: an empty queue, orders to come, and the fleet at the FC.
 
+    A new fleet has drawn SoH, fitted initial policies and full batteries. ``fleet`` (a
+    :class:`~dronefleet.fleet.SavedFleet`; default: ``config.fleet_file`` if set) gives
+    SoH, policies, step counters and SoC instead; its lost UAVs stay lost.
     ``supervisor`` is a path to a Nadzoru 2 file (default: the packaged UAV controller).
     ``orders`` (an :class:`~dronefleet.orders.Orders`) and ``soh`` ((n_uavs,) array) replace
     the drawn ones, for hand-made scenarios; the streams are split the same way regardless.
     """
-    order_rng, soh_rng, learner_rngs, bid_rng = _streams(config.seed, config.n_uavs)
-    drawn_soh = soh_rng.uniform(config.soh_min, config.soh_max, config.n_uavs)
-    soh = drawn_soh if soh is None else np.asarray(soh, dtype=np.float64)
+    if fleet is None and config.fleet_file:
+        fleet = load_fleet(config.fleet_file, config)
+    period = 1 if fleet is None else fleet.period + 1
+    order_rng, soh_rng, learner_rngs, bid_rng = _streams(config.seed, config.n_uavs, period)
     orders = generate_orders(config, order_rng) if orders is None else orders
     n, s = orders.arrival_s.shape[0], config.n_uavs
     mean, std = np.array(config.scaler_mean), np.array(config.scaler_std)
-    coef, intercept, steps = initial_fit(
-        s, mean, std, (config.distance_min_m, config.distance_max_m), (config.mass_min_kg, config.mass_max_kg),
-        config.alpha, config.initial_epochs, learner_rngs)
+    if fleet is None:
+        drawn_soh = soh_rng.uniform(config.soh_min, config.soh_max, config.n_uavs)
+        coef, intercept, steps = initial_fit(
+            s, mean, std, (config.distance_min_m, config.distance_max_m),
+            (config.mass_min_kg, config.mass_max_kg), config.alpha, config.initial_epochs, learner_rngs)
+        soc, lost = np.full(s, 100.0), np.zeros(s, np.bool_)
+    else:
+        drawn_soh, coef, intercept, steps = fleet.soh, fleet.coef.copy(), fleet.intercept.copy(), fleet.steps.copy()
+        soc, lost = np.where(fleet.lost, 0.0, fleet.soc), fleet.lost
+    soh = drawn_soh if soh is None else np.asarray(soh, dtype=np.float64)
     features = standardise(np.column_stack([orders.distance_m, orders.mass_kg, np.zeros(n)]), mean, std)
 
     rule = RULES[config.rule]
@@ -90,34 +123,39 @@ def initial_state(config, supervisor=None, orders=None, soh=None):
         delivered_s=np.full(n, np.nan), queue=np.zeros(n, np.int64))
     fleet = engine.Fleet(
         soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,
-        mode=np.full(s, engine.IDLE, np.int8), sup=np.tile(automaton.init_state.astype(np.int64), (s, 1)),
-        next_s=np.full(s, np.inf), soc_ref=np.full(s, 100.0), t_ref=np.zeros(s),
+        mode=np.where(lost, engine.LOST, engine.IDLE).astype(np.int8),
+        sup=np.tile(automaton.init_state.astype(np.int64), (s, 1)),
+        next_s=np.full(s, np.inf), soc_ref=soc.astype(np.float64), t_ref=np.zeros(s),
         order=np.full(s, -1, np.int64), attempt=np.full(s, -1, np.int64),
         takeoff_s=np.zeros(s), takeoff_soc=np.zeros(s), rate_out=np.zeros(s), turn_s=np.zeros(s),
         turn_soc=np.zeros(s), rate_home=np.zeros(s), home_s=np.zeros(s), land_soc=np.zeros(s),
-        delivers=np.zeros(s, np.bool_), lost=np.zeros(s, np.bool_), bidding=np.zeros(s, np.bool_),
+        delivers=np.zeros(s, np.bool_), lost=np.zeros(s, np.bool_), allocated_s=np.zeros(s),
+        forecast_wait_s=np.full(s, np.nan), bidding=np.zeros(s, np.bool_),
         reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), x_soc_best=np.zeros(s))
     n_samples = int(math.floor(config.horizon_s / config.record_interval_s)) + 1
     series = engine.Series(*(np.zeros(n_samples, np.int64) for _ in engine.Series._fields))
     counters = np.zeros(engine.N_COUNTERS, np.int64)
     counters[engine.LAST_ADVERTISED] = -1
-    counters[engine.N_IDLE] = s
+    counters[engine.N_IDLE] = s - int(lost.sum())
+    counters[engine.N_LOST] = int(lost.sum())
     params = engine.Params(
         speed_m_s=config.speed_m_s, xi=config.xi,
         charge_rate=charge_rate(config.capacity_wh, config.charger_power_w, config.charger_efficiency),
         power_empty_w=float(config_power(config, 0.0)), alpha=config.alpha, t0=optimal_init(config.alpha),
         soc_mean=mean[2], soc_std=std[2], theta=config.theta,
         advert_interval_s=config.advert_interval_s, record_interval_s=config.record_interval_s,
-        rule=rule.code, bids_on=bids_on)
+        rule=RULES[config.base_rule].code if rule.reserves else rule.code, bids_on=bids_on,
+        reserves=rule.reserves)
     return RunState(book, fleet, _attempt_table(max(64, n)), series, counters, params, table,
-                    bid_rng, orders.mass_kg)
+                    bid_rng, orders.mass_kg, period)
 
 
 def _attempt_table(capacity, old=None):
     """An empty attempt table of ``capacity`` rows, holding the rows of ``old`` if given."""
     new = engine.Attempts(
         uav=np.zeros(capacity, np.int32), order=np.zeros(capacity, np.int64),
-        takeoff_s=np.zeros(capacity), takeoff_soc=np.zeros(capacity), outcome=np.zeros(capacity, np.int8),
+        takeoff_s=np.zeros(capacity), takeoff_soc=np.zeros(capacity), allocated_s=np.zeros(capacity),
+        forecast_wait_s=np.full(capacity, np.nan), outcome=np.zeros(capacity, np.int8),
         turn_s=np.full(capacity, np.nan), return_s=np.full(capacity, np.nan), return_soc=np.full(capacity, np.nan),
         lost=np.zeros(capacity, np.bool_))
     if old is not None:
@@ -157,13 +195,13 @@ def stops(horizon_s):
     return [float(w) for w in weeks if w < horizon_s] + [float(horizon_s)]
 
 
-def simulate(config, supervisor=None, progress=None, orders=None, soh=None):
+def simulate(config, supervisor=None, progress=None, orders=None, soh=None, fleet=None):
     """Run the model of ``config`` (seed included) and return its :class:`RunResult`.
 
-    ``progress(t_s)`` is called at every week end if given; ``supervisor``, ``orders`` and
-    ``soh`` as in :func:`initial_state`.
+    ``progress(t_s)`` is called at every week end if given; ``supervisor``, ``orders``,
+    ``soh`` and ``fleet`` as in :func:`initial_state`.
     """
-    state = initial_state(config, supervisor, orders, soh)
+    state = initial_state(config, supervisor, orders, soh, fleet)
     snapshots = []
     for t in stops(config.horizon_s):
         advance(state, t)
@@ -181,4 +219,5 @@ def collect(state, snapshots, config):
                   attempts=book.attempts, delivered_s=book.delivered_s)
     series = {name: column for name, column in zip(engine.Series._fields, state.series)}
     series["t_s"] = np.arange(state.series.delivered.shape[0]) * config.record_interval_s
-    return RunResult(config, orders, attempts, snapshots, series, int(state.counters[engine.N_AUCTIONS]))
+    return RunResult(config, orders, attempts, snapshots, series, int(state.counters[engine.N_AUCTIONS]),
+                     int(state.counters[engine.N_RESERVATIONS]), state.period)

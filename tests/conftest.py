@@ -99,7 +99,7 @@ def attempts_list(result):
 def every_tick_rules():
     """A copy of every built-in rule registered with bids_on="any" (no tick skip), removed after."""
     names = {}
-    for name in ("least_confident", "most_confident", "random", "threshold"):
+    for name in ("least_confident", "most_confident", "random", "threshold", "reservation"):
         copy = name + "_every_tick"
         # The same rule with bids_on = "any": the engine evaluates every tick.
         auction.RULES[copy] = auction.RULES[name]._replace(bids_on="any")

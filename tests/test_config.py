@@ -45,7 +45,7 @@ def with_value(key, value):
 
 def test_sections_in_declared_order_and_keys_unique():
     assert list(SECTIONS) == ["run", "orders", "fleet", "energy", "auction", "policy"]
-    assert SECTIONS["run"] == ("seed", "horizon_weeks", "record_interval_s")
+    assert SECTIONS["run"] == ("seed", "horizon_weeks", "record_interval_s", "fleet_file")
     assert SECTIONS["policy"] == ("alpha", "eta0", "initial_epochs", "scaler_mean", "scaler_std")
     keys = [k for ks in SECTIONS.values() for k in ks]
     assert len(keys) == len(set(keys)) == len(dataclasses.fields(Config))
@@ -56,6 +56,7 @@ def test_defaults_are_model_md():
     assert (c.seed, c.n_uavs, c.tau_minutes, c.xi, c.initial_epochs) == (0, 25, 15.0, 0.5, 7)
     assert (c.distance_min_m, c.distance_max_m, c.distance_sampling) == (1000.0, 6000.0, "uniform")
     assert (c.soh_min, c.soh_max, c.theta, c.advert_interval_s) == (0.5, 1.0, 50.0, 2.0)
+    assert (c.rule, c.base_rule, c.fleet_file) == ("least_confident", "least_confident", "")
     assert c.scaler_mean == (3500.0, 2.75, 50.0)
     assert c.scaler_std == (1443.38, 1.298, 28.87)
     assert c.horizon_s == 4_838_400.0

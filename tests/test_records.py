@@ -17,17 +17,21 @@ SCHEMAS = {
                "winners": pa.list_(pa.int16()), "delivered_s": pa.float64(), "delivery_time_s": pa.float64()},
     "attempts": {"attempt_id": pa.int32(), "uav": pa.int16(), "order_id": pa.int32(), "takeoff_s": pa.float64(),
                  "takeoff_soc": pa.float64(), "outcome": pa.string(), "parcel_delivered": pa.bool_(),
-                 "turn_s": pa.float64(), "return_s": pa.float64(), "return_soc": pa.float64()},
+                 "turn_s": pa.float64(), "return_s": pa.float64(), "return_soc": pa.float64(),
+                 "allocated_s": pa.float64(), "reserved": pa.bool_(), "wait_s": pa.float64(),
+                 "forecast_wait_s": pa.float64(), "forecast_met": pa.bool_()},
     "fleet": {"week": pa.int16(), "t_s": pa.float64(), "uav": pa.int16(), "soh": pa.float64(),
               "w_distance": pa.float64(), "w_mass": pa.float64(), "w_soc": pa.float64(),
-              "intercept": pa.float64(), "steps": None, "soc": pa.float64(), "lost": pa.bool_()},
+              "intercept": pa.float64(), "steps": None, "soc": pa.float64(), "lost": pa.bool_(),
+              "decision_accuracy": pa.float64(), "period": pa.int16()},
     "timeseries": {"t_s": pa.float64(), "delivered": pa.int64(), "unallocated": pa.int64(),
                    "in_flight": pa.int64(), "aborted_attempts": pa.int64(), "idle": pa.int64(),
-                   "lost": pa.int64()},
+                   "lost": pa.int64(), "reserved": pa.int64()},
 }
-SUMMARY_HEAD = ["seed", "rule", "tau_minutes", "n_uavs", "horizon_weeks"]
+SUMMARY_HEAD = ["seed", "rule", "tau_minutes", "n_uavs", "horizon_weeks", "period"]
 METRICS = ["orders_arrived", "delivered", "median_delivery_time_s", "attempts", "aborted_attempts",
-           "aborted_pct", "pending", "backlog_age_s", "lost_uavs", "auctions", "decision_accuracy"]
+           "aborted_pct", "pending", "backlog_age_s", "lost_uavs", "auctions", "decision_accuracy",
+           "reservations_won", "median_reservation_wait_s", "forecast_met_pct"]
 
 
 @pytest.fixture(scope="module")
@@ -52,12 +56,12 @@ def test_table_schemas(small_run, tmp_path):
                 assert schema.field(col).type == typ, (name, col)
     summary = pq.read_table(paths["summary"])
     assert summary.num_rows == 1
-    assert summary.schema.names[:5] == SUMMARY_HEAD
+    assert summary.schema.names[:6] == SUMMARY_HEAD
     assert set(METRICS) <= set(summary.schema.names)
     row = summary.to_pylist()[0]
     c = small_run.config
-    assert (row["seed"], row["rule"], row["tau_minutes"], row["n_uavs"], row["horizon_weeks"]) == (
-        c.seed, c.rule, c.tau_minutes, c.n_uavs, c.horizon_weeks)
+    assert (row["seed"], row["rule"], row["tau_minutes"], row["n_uavs"], row["horizon_weeks"], row["period"]) == (
+        c.seed, c.rule, c.tau_minutes, c.n_uavs, c.horizon_weeks, 1)
     assert pa.types.is_string(summary.schema.field("rule").type)
     for key in ("orders_arrived", "delivered", "attempts", "aborted_attempts", "pending", "lost_uavs", "auctions"):
         assert pa.types.is_integer(summary.schema.field(key).type), key
@@ -132,6 +136,8 @@ def test_metrics_on_a_tiny_scenario():
     assert m["backlog_age_s"] == pytest.approx((T - 20.0) + (T - 1000.0), rel=1e-12)
     assert m["lost_uavs"] == 0
     assert m["auctions"] == 3
+    assert m["reservations_won"] == 0
+    assert math.isnan(m["median_reservation_wait_s"]) and math.isnan(m["forecast_met_pct"])
     t = records.tables(r)
     orders = t["orders"].to_pydict()
     assert orders["delivered_s"][:2] == pytest.approx([100.0, 800.0], rel=1e-12)
@@ -147,8 +153,11 @@ def test_metrics_on_a_tiny_scenario():
     assert attempts["return_s"][:2] == pytest.approx([200.0, 1400.0], rel=1e-12)
     assert attempts["return_s"][2] is None and attempts["return_soc"][2] is None
     assert attempts["takeoff_soc"] == pytest.approx([100.0, land0, land1], rel=1e-12)
+    assert attempts["allocated_s"] == attempts["takeoff_s"] and attempts["wait_s"] == [0.0, 0.0, 0.0]
+    assert attempts["reserved"] == [False] * 3
+    assert attempts["forecast_wait_s"] == attempts["forecast_met"] == [None] * 3
     summary = t["summary"].to_pylist()[0]
-    assert {k: summary[k] for k in METRICS} == m
+    assert str({k: summary[k] for k in METRICS}) == str(m)  # nan-safe
     ts = t["timeseries"].to_pydict()
     assert ts["t_s"] == [0.0, 900.0, 1800.0]
     assert ts["delivered"] == [0, 2, 2]

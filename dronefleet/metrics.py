@@ -53,30 +53,47 @@ def run_metrics(result):
     }
 
 
-def by_arrival_week(arrival_s, delivered_s, horizon_s):
+def by_arrival_week(arrival_s, delivered_s, horizon_s, run=None):
     """Pending orders and backlog age at the horizon, by the week the orders arrived in.
 
     Parameters
     ----------
     arrival_s, delivered_s : array_like, shape (n_orders,)
-        Arrival and delivery instants (nan or None: not delivered by the horizon).
+        Arrival and delivery instants (nan or None: not delivered by the horizon), s.
+        Arrivals must lie in [0, horizon_s).
     horizon_s : float
+        End of the run(s), s.
+    run : array_like of int, shape (n_orders,), optional
+        Run index 0..n_runs-1 of each order, to tabulate many runs of the same horizon at
+        once (``dronefleet.analysis.backlog_by_arrival_week`` does); default one run.
 
     Returns
     -------
     pandas.DataFrame
-        One row per arrival week 1..ceil(horizon / week): arrived, pending, backlog_age_s.
+        One row per arrival week 1..ceil(horizon / week) (per run, preceded by a ``run``
+        column, if ``run`` is given): arrived, pending (orders not delivered by the
+        horizon), backlog_age_s (sum of horizon - arrival over them, s).
     """
     arrival = np.asarray(arrival_s, dtype=np.float64)
     pending = np.isnan(np.asarray(delivered_s, dtype=np.float64))
-    week = (arrival // SECONDS_PER_WEEK).astype(np.int64)
     n_weeks = int(np.ceil(horizon_s / SECONDS_PER_WEEK))
-    return pd.DataFrame({
-        "arrival_week": np.arange(1, n_weeks + 1),
-        "arrived": np.bincount(week, minlength=n_weeks),
-        "pending": np.bincount(week[pending], minlength=n_weeks),
-        "backlog_age_s": np.bincount(week[pending], weights=horizon_s - arrival[pending], minlength=n_weeks),
+    if arrival.size and not (arrival.min() >= 0.0 and arrival.max() < horizon_s):
+        raise ValueError(f"arrivals must lie in [0, horizon_s = {horizon_s:g}) s; is horizon_s the runs' horizon?")
+    codes = np.zeros(arrival.shape[0], dtype=np.int64) if run is None else np.asarray(run, dtype=np.int64)
+    n_runs = int(codes.max()) + 1 if codes.size else 1
+    # One flat bin per (run, week), so every run is counted by the same three bincounts.
+    cell = codes * n_weeks + (arrival // SECONDS_PER_WEEK).astype(np.int64)
+    size = n_runs * n_weeks
+    table = pd.DataFrame({
+        "run": np.repeat(np.arange(n_runs), n_weeks),
+        "arrival_week": np.tile(np.arange(1, n_weeks + 1), n_runs),
+        "arrived": np.bincount(cell, minlength=size),
+        "pending": np.bincount(cell[pending], minlength=size),
+        # float64 even with nothing pending (bincount of no values returns int64 zeros).
+        "backlog_age_s": np.bincount(cell[pending], weights=horizon_s - arrival[pending],
+                                     minlength=size).astype(np.float64),
     })
+    return table if run is not None else table.drop(columns="run")
 
 
 def accuracy_points(config, n_points=1000):

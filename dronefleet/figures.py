@@ -1,0 +1,330 @@
+"""The study's figures (EXPERIMENTS.md, Figures 16-20) as PNG files, from tidy tables alone.
+
+Each function takes a table of :mod:`dronefleet.analysis` (as stored in parquet under
+``results/<figure>/``), draws one figure and writes it to ``path``. Nothing here imports
+the simulator, so a figure can be redrawn without re-simulating.
+
+matplotlib is an optional dependency (``pip install 'dronefleet[plots]'``), imported
+only when a figure is drawn. Figures are ``matplotlib.figure.Figure`` objects on the Agg
+canvas, never pyplot, so nothing stays registered in pyplot's global state; they are
+drawn under matplotlib's default style whatever the user's matplotlibrc, and saved
+without the "Software" entry, so the same table gives the same bytes.
+
+Colours: one per rule (``rule`` column), in sorted order of the rules in the table, so
+a rule keeps its colour across the panels of a figure.
+"""
+
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+DPI = 150
+SECONDS_PER_MINUTE = 60.0
+SECONDS_PER_DAY = 86_400.0
+
+
+def _matplotlib():
+    """The matplotlib package with the submodules used here, or an error that says how to install it."""
+    try:
+        import matplotlib
+        import matplotlib.backends.backend_agg
+        import matplotlib.cbook
+        import matplotlib.figure
+        import matplotlib.patches
+        import matplotlib.style
+        import matplotlib.ticker
+    except ImportError as error:
+        raise ImportError("drawing figures needs matplotlib: pip install 'dronefleet[plots]'") from error
+    return matplotlib
+
+
+@contextmanager
+def _figure(path, title, figsize, **subplots):
+    """A new figure and its axes (``Figure.subplots(**subplots)``), saved to ``path`` on exit."""
+    mpl = _matplotlib()
+    # The default style also while saving: rcParams are read when artists are drawn.
+    with mpl.style.context("default"):
+        fig = mpl.figure.Figure(figsize=figsize, layout="constrained")
+        mpl.backends.backend_agg.FigureCanvasAgg(fig)
+        axes = fig.subplots(**subplots)
+        yield mpl, fig, axes
+        fig.suptitle(title)
+        fig.savefig(path, dpi=DPI, format="png", metadata={"Software": None})
+
+
+def _colours(rules):
+    """Colour of each rule: tab10 in sorted order of the rule names."""
+    return {rule: f"C{i % 10}" for i, rule in enumerate(sorted(set(rules)))}
+
+
+def _dodge(k, n, width):
+    """Offset of the k-th of n side-by-side items of ``width``, so that together they centre on 0."""
+    return (k - (n - 1) / 2) * width
+
+
+def _legend_patches(mpl, colours):
+    return [mpl.patches.Patch(facecolor=colour, alpha=0.6, label=rule) for rule, colour in colours.items()]
+
+
+def delivered_vs_delivery_time(outcomes, path, title):
+    """2-D box plots of delivered parcels against delivery time, one per (rule, tau) (Fig. 16a/19a).
+
+    x: per-run median delivery time (min, log scale), y: delivered parcels. Each box spans the
+    quartiles on both axes with a cross at the medians; whiskers (1.5 IQR, matplotlib's
+    rule) run along the median lines; runs outside a whisker are dots. tau (min) is
+    written at the box's upper right corner. Runs without a delivery have no delivery
+    time and are left out of the x statistics.
+
+    Parameters
+    ----------
+    outcomes : pandas.DataFrame
+        :func:`dronefleet.analysis.run_outcomes` rows: ``rule, tau_minutes, delivered,
+        median_delivery_time_s``.
+    path : str or Path
+        PNG file to write.
+    title : str
+        Figure title (names the figure).
+
+    Returns
+    -------
+    Path
+    """
+    colours = _colours(outcomes["rule"])
+    with _figure(path, title, (8.0, 6.0)) as (mpl, fig, ax):
+        for (rule, tau), runs in outcomes.groupby(["rule", "tau_minutes"], sort=True):
+            colour = colours[rule]
+            minutes = runs["median_delivery_time_s"].to_numpy(np.float64) / SECONDS_PER_MINUTE
+            delivered = runs["delivered"].to_numpy(np.float64)
+            sx = mpl.cbook.boxplot_stats(minutes[~np.isnan(minutes)])[0]
+            sy = mpl.cbook.boxplot_stats(delivered)[0]
+            ax.add_patch(mpl.patches.Rectangle((sx["q1"], sy["q1"]), sx["q3"] - sx["q1"], sy["q3"] - sy["q1"],
+                                               facecolor=colour, alpha=0.3, edgecolor=colour))
+            ax.plot([sx["whislo"], sx["whishi"]], [sy["med"], sy["med"]], color=colour, lw=1)
+            ax.plot([sx["med"], sx["med"]], [sy["whislo"], sy["whishi"]], color=colour, lw=1)
+            outside = ((minutes < sx["whislo"]) | (minutes > sx["whishi"])
+                       | (delivered < sy["whislo"]) | (delivered > sy["whishi"]))
+            ax.plot(minutes[outside], delivered[outside], ".", color=colour, ms=4)
+            ax.annotate(f"{tau:g}", (sx["q3"], sy["q3"]), xytext=(2, 2), textcoords="offset points",
+                        fontsize=7, color=colour)
+        ax.set_xscale("log")  # medians span minutes (light load) to days (overload)
+        ax.xaxis.set_major_formatter(mpl.ticker.FormatStrFormatter("%g"))
+        ax.set_xlabel("delivery time, per-run median (min, log scale)")
+        ax.set_ylabel("delivered parcels per run")
+        ax.legend(handles=_legend_patches(mpl, colours), title="rule (labels: tau, min)", fontsize=8)
+    return Path(path)
+
+
+def aborted_by_tau(outcomes, path, title):
+    """Box plots of aborted attempts (% of all attempts) against tau, side by side per rule (Fig. 16b/19b).
+
+    Parameters
+    ----------
+    outcomes : pandas.DataFrame
+        :func:`dronefleet.analysis.run_outcomes` rows: ``rule, tau_minutes, aborted_pct``.
+    path : str or Path
+    title : str
+
+    Returns
+    -------
+    Path
+    """
+    colours = _colours(outcomes["rule"])
+    taus = np.sort(outcomes["tau_minutes"].unique())
+    step = np.diff(taus).min() if taus.size > 1 else 1.0
+    width = 0.8 * step / len(colours)
+    with _figure(path, title, (8.0, 4.5)) as (mpl, fig, ax):
+        for k, (rule, colour) in enumerate(colours.items()):
+            runs = outcomes[outcomes["rule"] == rule]
+            at, stats = zip(*[(tau, mpl.cbook.boxplot_stats(values.dropna().to_numpy())[0])
+                              for tau, values in runs.groupby("tau_minutes", sort=True)["aborted_pct"]])
+            offset = _dodge(k, len(colours), width)
+            ax.bxp(stats, positions=np.array(at) + offset, widths=0.9 * width,
+                   patch_artist=True, manage_ticks=False, boxprops=dict(facecolor=colour, alpha=0.6),
+                   medianprops=dict(color="black"), flierprops=dict(marker=".", markeredgecolor=colour))
+        ax.set_xticks(taus, [f"{tau:g}" for tau in taus])
+        ax.set_xlabel("mean inter-arrival time tau (min)")
+        ax.set_ylabel("aborted attempts (% of attempts)")
+        ax.legend(handles=_legend_patches(mpl, colours), title="rule", fontsize=8)
+    return Path(path)
+
+
+def backlog_bars(backlog, path, title):
+    """Backlog age at the end, stacked by arrival week, per tau; one panel per rule (Fig. 16c/19c).
+
+    Bar height: the mean over runs of the summed age (horizon - arrival) of the orders
+    pending at the end, in days; each segment holds the orders of one arrival week.
+
+    Parameters
+    ----------
+    backlog : pandas.DataFrame
+        :func:`dronefleet.analysis.backlog_by_arrival_week` rows: ``rule, tau_minutes, seed,
+        arrival_week, backlog_age_s``.
+    path : str or Path
+    title : str
+
+    Returns
+    -------
+    Path
+    """
+    days = (backlog.groupby(["rule", "tau_minutes", "arrival_week"], sort=True)["backlog_age_s"].mean()
+            / SECONDS_PER_DAY).unstack("arrival_week", fill_value=0.0)
+    rules = days.index.get_level_values("rule").unique()
+    weeks = days.columns
+    with _figure(path, title, (3.2 * len(rules) + 1.5, 4.5), ncols=len(rules), sharey=True,
+                 squeeze=False) as (mpl, fig, axes):
+        week_colours = mpl.colormaps["viridis"](np.linspace(0.0, 0.9, len(weeks)))
+        for ax, rule in zip(axes[0], rules):
+            stack = days.loc[rule]
+            taus = [f"{tau:g}" for tau in stack.index]
+            bottom = np.zeros(len(stack))
+            for week, colour in zip(weeks, week_colours):
+                ax.bar(taus, stack[week], bottom=bottom, color=colour, label=f"week {week}")
+                bottom += stack[week].to_numpy()
+            ax.set_title(rule)
+            ax.set_xlabel("tau (min)")
+        axes[0, 0].set_ylabel("backlog age at the end (days)\nsum over pending orders, mean over runs")
+        axes[0, -1].legend(title="arrival week", fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    return Path(path)
+
+
+def accuracy_over_weeks(accuracy, path, title):
+    """Mean decision accuracy per week, one line per rule with its confidence band (Fig. 17).
+
+    Parameters
+    ----------
+    accuracy : pandas.DataFrame
+        :func:`dronefleet.analysis.weekly_accuracy` rows: ``rule, week, uavs,
+        mean_accuracy, ci_low, ci_high, confidence``.
+    path : str or Path
+    title : str
+
+    Returns
+    -------
+    Path
+    """
+    colours = _colours(accuracy["rule"])
+    with _figure(path, title, (7.0, 4.5)) as (mpl, fig, ax):
+        for rule, colour in colours.items():
+            rows = accuracy[accuracy["rule"] == rule].sort_values("week")
+            ax.fill_between(rows["week"], rows["ci_low"], rows["ci_high"], color=colour, alpha=0.25, lw=0)
+            ax.plot(rows["week"], rows["mean_accuracy"], "o-", color=colour, ms=4,
+                    label=f"{rule} (n = {rows['uavs'].max()} UAVs)")
+        confidence = accuracy["confidence"].iloc[0]
+        ax.set_xlabel("end of week")
+        ax.set_ylabel("decision accuracy (share of 1000 test points)")
+        ax.set_xticks(np.sort(accuracy["week"].unique()))
+        ax.legend(title=f"rule; band: {100 * confidence:g} % CI of the mean", fontsize=8)
+    return Path(path)
+
+
+def winner_soh_heatmaps(grid, path, title):
+    """Mean SoH of the auction winner over distance and mass, one heatmap per SoC (Fig. 18).
+
+    Blank where nobody bid in any run; one colour scale for every panel.
+
+    Parameters
+    ----------
+    grid : pandas.DataFrame
+        :func:`dronefleet.analysis.winner_soh_grid` rows: ``soc, distance_m, mass_kg,
+        mean_winner_soh``.
+    path : str or Path
+    title : str
+
+    Returns
+    -------
+    Path
+    """
+    socs = np.sort(grid["soc"].unique())
+    ncols = min(5, len(socs))
+    nrows = -(-len(socs) // ncols)
+    vmin, vmax = grid["mean_winner_soh"].min(), grid["mean_winner_soh"].max()
+    with _figure(path, title, (3.0 * ncols + 1.0, 2.6 * nrows + 0.6), nrows=nrows, ncols=ncols,
+                 sharex=True, sharey=True, squeeze=False) as (mpl, fig, axes):
+        for ax, soc in zip(axes.flat, socs):
+            cells = grid[grid["soc"] == soc].pivot(index="mass_kg", columns="distance_m", values="mean_winner_soh")
+            mesh = ax.pcolormesh(cells.columns / 1000.0, cells.index, cells.to_numpy(), shading="nearest",
+                                 cmap="viridis", vmin=vmin, vmax=vmax)
+            ax.set_title(f"SoC = {soc:g} %", fontsize=9)
+        for ax in axes.flat[len(socs):]:
+            ax.set_visible(False)
+        for ax in axes[-1]:
+            ax.set_xlabel("distance (km)")
+        for ax in axes[:, 0]:
+            ax.set_ylabel("parcel mass (kg)")
+        fig.colorbar(mesh, ax=axes, label="mean SoH of the winner (blank: nobody bids)", fraction=0.03, pad=0.01)
+    return Path(path)
+
+
+def write_threshold_table(table, path):
+    """Figure 19's table of thresholds, as CSV (SI units) and as Markdown (readable units).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`dronefleet.analysis.threshold_table`'s table.
+    path : str or Path
+        File name; its suffix is replaced by ``.csv`` and ``.md``.
+
+    Returns
+    -------
+    (Path, Path)
+        The CSV and Markdown files.
+    """
+    path = Path(path)
+    csv, md = path.with_suffix(".csv"), path.with_suffix(".md")
+    table.to_csv(csv, index=False)
+    shown = pd.DataFrame({
+        "theta (%)": table["theta"].map("{:g}".format),
+        "runs": table["runs"].map(str),
+        "delivered (mean)": table["delivered_mean"].map("{:.1f}".format),
+        "delivered (median)": table["delivered_median"].map("{:.1f}".format),
+        "delivery time (median, min)": (table["median_delivery_time_s"] / SECONDS_PER_MINUTE).map("{:.1f}".format),
+        "aborted (%, mean)": table["aborted_pct_mean"].map("{:.2f}".format),
+        "pending (mean)": table["pending_mean"].map("{:.1f}".format),
+        "backlog age (days, mean)": (table["backlog_age_s_mean"] / SECONDS_PER_DAY).map("{:.1f}".format),
+        "best": table["best"].map({True: "yes", False: ""}),
+    })
+    lines = ["| " + " | ".join(shown.columns) + " |", "|" + "---|" * shown.shape[1]]
+    lines += ["| " + " | ".join(row) + " |" for row in shown.itertuples(index=False)]
+    md.write_text("\n".join(lines) + "\n")
+    return csv, md
+
+
+def pending_bars(pending, path, title):
+    """Pending orders at the end by arrival week, bars side by side per rule (Fig. 20).
+
+    Bar: mean over runs; dots: the runs (spread evenly across the bar, in seed order).
+
+    Parameters
+    ----------
+    pending : pandas.DataFrame
+        :func:`dronefleet.analysis.backlog_by_arrival_week` rows with ``by=("rule",)``:
+        ``rule, seed, arrival_week, pending``.
+    path : str or Path
+    title : str
+
+    Returns
+    -------
+    Path
+    """
+    colours = _colours(pending["rule"])
+    width = 0.8 / len(colours)
+    with _figure(path, title, (8.0, 4.5)) as (mpl, fig, ax):
+        for k, (rule, colour) in enumerate(colours.items()):
+            rows = pending[pending["rule"] == rule].sort_values(["arrival_week", "seed"])
+            offset = _dodge(k, len(colours), width)
+            mean = rows.groupby("arrival_week", sort=True)["pending"].mean()
+            ax.bar(mean.index + offset, mean, width=0.9 * width, color=colour, alpha=0.6,
+                   label=f"{rule} (mean of {rows['seed'].nunique()} runs)")
+            # Each run's dot sits in its bar by its rank among the week's runs.
+            by_week = rows.groupby("arrival_week")
+            share = (by_week.cumcount().to_numpy() + 0.5) / by_week["seed"].transform("size").to_numpy()
+            ax.plot(rows["arrival_week"].to_numpy() + offset + (share - 0.5) * 0.7 * width, rows["pending"], ".",
+                    color="black", ms=2.5)
+        ax.set_xticks(np.sort(pending["arrival_week"].unique()))
+        ax.set_xlabel("arrival week")
+        ax.set_ylabel("pending orders at the end")
+        ax.legend(title="dots: single runs", fontsize=8)
+    return Path(path)

@@ -1,0 +1,122 @@
+"""Figures: a PNG per table, the same bytes for the same table, no simulator, no pyplot, no user style."""
+
+import ast
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from dronefleet import figures
+
+matplotlib = pytest.importorskip("matplotlib")
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def outcomes():
+    rng = np.random.default_rng(0)
+    rows = [(rule, tau, seed) for rule in ("least_confident", "random") for tau in (15.0, 30.0) for seed in range(5)]
+    frame = pd.DataFrame(rows, columns=["rule", "tau_minutes", "seed"])
+    return frame.assign(delivered=rng.integers(1000, 3000, len(frame)),
+                        median_delivery_time_s=rng.uniform(600.0, 6000.0, len(frame)),
+                        aborted_pct=rng.uniform(5.0, 30.0, len(frame)))
+
+
+def backlog():
+    rows = [(rule, tau, seed, week) for rule in ("least_confident", "random") for tau in (15.0, 30.0)
+            for seed in range(3) for week in (1, 2, 3)]
+    frame = pd.DataFrame(rows, columns=["rule", "tau_minutes", "seed", "arrival_week"])
+    rng = np.random.default_rng(1)
+    return frame.assign(pending=rng.integers(0, 50, len(frame)), backlog_age_s=rng.uniform(0.0, 1e7, len(frame)))
+
+
+def accuracy():
+    weeks = np.arange(1, 5)
+    return pd.concat([pd.DataFrame({"rule": rule, "week": weeks, "uavs": 500, "mean_accuracy": 0.6 + shift + 0.05 * weeks,
+                                    "ci_low": 0.58 + shift + 0.05 * weeks, "ci_high": 0.62 + shift + 0.05 * weeks,
+                                    "confidence": 0.95})
+                      for rule, shift in (("least_confident", 0.05), ("random", 0.0))], ignore_index=True)
+
+
+def winner_grid():
+    soc, distance, mass = (a.ravel() for a in np.meshgrid([50.0, 100.0], [1000.0, 2000.0, 3000.0], [0.5, 1.0],
+                                                          indexing="ij"))
+    soh = np.where(distance * mass > 2500.0, np.nan, 0.5 + distance / 6000.0)  # nobody bids on the far heavy ones
+    return pd.DataFrame({"soc": soc, "distance_m": distance, "mass_kg": mass, "mean_winner_soh": soh,
+                         "runs_with_winner": 3, "runs": 3})
+
+
+DRAWINGS = {
+    "delivered_vs_delivery_time": (figures.delivered_vs_delivery_time, outcomes, "delivered"),
+    "aborted_by_tau": (figures.aborted_by_tau, outcomes, "aborted_pct"),
+    "backlog_bars": (figures.backlog_bars, backlog, "backlog_age_s"),
+    "accuracy_over_weeks": (figures.accuracy_over_weeks, accuracy, "mean_accuracy"),
+    "winner_soh_heatmaps": (figures.winner_soh_heatmaps, winner_grid, "mean_winner_soh"),
+    "pending_bars": (figures.pending_bars, lambda: backlog()[lambda f: f["tau_minutes"] == 15.0], "pending"),
+}
+
+
+@pytest.mark.parametrize("name", DRAWINGS)
+def test_a_table_gives_a_png_of_the_same_bytes_every_time_and_the_data_shows(name, tmp_path, monkeypatch):
+    draw, table, column = DRAWINGS[name]
+    import dronefleet.simulation
+
+    def no_simulation(*args, **kwargs):
+        raise AssertionError("a figure must not simulate")
+
+    monkeypatch.setattr(dronefleet.simulation, "simulate", no_simulation)
+    paths = [draw(table(), tmp_path / "first.png", f"Figure: {name}"),
+             draw(table(), tmp_path / "second.png", f"Figure: {name}")]
+    first, second = (path.read_bytes() for path in paths)
+    assert first.startswith(PNG) and len(first) > 10_000
+    assert first == second
+    assert b"matplotlib" not in first.lower()  # no Software entry (it names the version)
+    changed = table()
+    changed[column] = changed[column] * 1.5
+    assert draw(changed, tmp_path / "changed.png", f"Figure: {name}").read_bytes() != first
+
+
+def test_the_users_matplotlib_style_changes_nothing(tmp_path):
+    before = figures.aborted_by_tau(outcomes(), tmp_path / "before.png", "Figure").read_bytes()
+    with matplotlib.rc_context({"lines.linewidth": 7.0, "axes.facecolor": "red", "font.size": 20}):
+        styled = figures.aborted_by_tau(outcomes(), tmp_path / "styled.png", "Figure").read_bytes()
+        assert matplotlib.rcParams["lines.linewidth"] == 7.0  # and the user's settings stay
+    assert styled == before
+
+
+def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp_path):
+    # Imports only the standard library, numpy, pandas and (lazily) matplotlib: none of them imports
+    # dronefleet, so drawing cannot load the engine.
+    tree = ast.parse(Path(figures.__file__).read_text())
+    modules = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
+               for alias in node.names}
+    modules |= {node.module.split(".")[0] if node.level == 0 else "." for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom)}
+    assert modules == {"contextlib", "pathlib", "numpy", "pandas", "matplotlib"}
+    figures.accuracy_over_weeks(accuracy(), tmp_path / "fig.png", "Figure")
+    # matplotlib itself may import pyplot (to resolve its default backend), but no figure is left there.
+    if "matplotlib.pyplot" in sys.modules:
+        assert sys.modules["matplotlib.pyplot"].get_fignums() == []
+
+
+def test_without_matplotlib_the_error_says_how_to_install_it(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    with pytest.raises(ImportError, match=r"pip install 'dronefleet\[plots\]'"):
+        figures.aborted_by_tau(outcomes(), tmp_path / "fig.png", "Figure")
+    assert not (tmp_path / "fig.png").exists()
+
+
+def test_threshold_table_files(tmp_path):
+    table = pd.DataFrame({"theta": [50.0, 80.0], "runs": [120, 120], "delivered_mean": [2500.25, 3100.0],
+                          "delivered_median": [2490.0, 3105.5], "median_delivery_time_s": [5400.0, 1800.0],
+                          "aborted_pct_mean": [12.5, 1.25], "pending_mean": [800.0, 200.0],
+                          "backlog_age_s_mean": [86_400.0 * 30, 86_400.0 * 3], "best": [False, True]})
+    csv, md = figures.write_threshold_table(table, tmp_path / "thresholds.png")
+    assert (csv.name, md.name) == ("thresholds.csv", "thresholds.md")
+    pd.testing.assert_frame_equal(pd.read_csv(csv), table)
+    lines = md.read_text().splitlines()
+    assert lines[0].startswith("| theta (%) | runs | delivered (mean) |")
+    assert lines[2] == "| 50 | 120 | 2500.2 | 2490.0 | 90.0 | 12.50 | 800.0 | 30.0 |  |"
+    assert lines[3] == "| 80 | 120 | 3100.0 | 3105.5 | 30.0 | 1.25 | 200.0 | 3.0 | yes |"

@@ -1,11 +1,12 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
-[--fleet FILE] [--save-fleet FILE]``."""
+[--fleet FILE] [--save-fleet FILE]``; ``dronefleet sweep plan|run|status|collect SWEEP``."""
 
 import argparse
 import sys
 import time
 from pathlib import Path
 
+from . import sweep
 from .config import SECONDS_PER_WEEK, ConfigError, load_config
 
 
@@ -94,7 +95,49 @@ def build_parser():
                         "same as --set run.fleet_file=FILE")
     p.add_argument("--save-fleet", metavar="FILE", help="save the fleet at the end of the run (parquet)")
     p.set_defaults(func=run)
+    _add_sweep_commands(commands)
     return parser
+
+
+def _at_least(least):
+    """argparse type: an integer >= ``least``."""
+    def integer(text):
+        if not text.isdigit() or int(text) < least:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {least}, got {text!r}")
+        return int(text)
+    return integer
+
+
+def _add_sweep_commands(commands):
+    """``dronefleet sweep plan|run|status|collect SWEEP``; the handlers are in :mod:`dronefleet.sweep`."""
+    sweeps = commands.add_parser("sweep", help="parameter sweeps: plan a job array, run, status, collect",
+                                 description="Grids of conditions times seeds; see the README, section Sweeps.")
+    actions = sweeps.add_subparsers(dest="action", required=True)
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/fig16.toml")
+    common.add_argument("--results", default="results", metavar="DIR",
+                        help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
+    p = actions.add_parser("plan", parents=[common], help="print the runs and tasks, write a SLURM job-array script")
+    p.add_argument("--out", help="where to write the script (default: DIR/<name>/<name>.sbatch)")
+    p.add_argument("--time", help="#SBATCH --time of each task, e.g. 00:30:00")
+    p.add_argument("--partition", help="#SBATCH --partition")
+    p.add_argument("--account", help="#SBATCH --account")
+    p.set_defaults(func=sweep.plan_command)
+    p = actions.add_parser("run", parents=[common], help="run one task's runs, or all runs; skip those done")
+    p.add_argument("--task-id", type=_at_least(0), metavar="N",
+                   help="run job-array task N (0-based); default: from SLURM_ARRAY_TASK_ID, PBS_ARRAY_INDEX, "
+                        "SGE_TASK_ID or LSB_JOBINDEX, else all runs")
+    p.add_argument("--jobs", type=_at_least(1), metavar="J",
+                   help="local processes (default: all CPUs, or 1 for a task)")
+    p.add_argument("--executor", choices=("local", "dask"), default="local",
+                   help="local processes (default) or a Dask cluster (needs --scheduler)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, e.g. tcp://10.0.0.1:8786")
+    p.set_defaults(func=sweep.run_command)
+    p = actions.add_parser("status", parents=[common], help="done, missing and failed runs (with their errors)")
+    p.set_defaults(func=sweep.status_command)
+    p = actions.add_parser("collect", parents=[common],
+                           help="one summary table, a row per run, as DIR/<name>/collected.parquet")
+    p.set_defaults(func=sweep.collect_command)
 
 
 def main(argv=None):

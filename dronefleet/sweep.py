@@ -1,0 +1,581 @@
+"""Parameter sweeps: a grid of config values times seeds, one hive-partitioned dataset.
+
+A sweep file is TOML (``configs/sweeps/``)::
+
+    [sweep]
+    name = "fig16"              # the dataset is <results>/fig16/ (default: the file's stem)
+    base = "../paper.toml"      # config file, relative to this file (default: the paper's defaults)
+    seeds = { start = 0, count = 20 }   # or a list: seeds = [0, 1, 2]
+    runs_per_task = 10          # runs per job-array task (default 10)
+    [set]                       # fixed changes to the base: any config keys
+    horizon_weeks = 8
+    [grid]                      # lists of values: the runs are their full product times the seeds
+    rule = ["least_confident", "most_confident", "random"]
+    tau_minutes = [15, 20, 25, 30, 35, 40]
+
+Keys in ``[set]`` and ``[grid]`` are ``section.key`` or bare key names, as with
+``dronefleet run --set``. :func:`load_sweep` builds (and so validates) the config of
+every run before anything runs; any problem is a :class:`SweepError` naming the key.
+
+Runs are enumerated in one fixed order: the grid's product in the file's key order (the
+last key varies fastest), seeds innermost. Task ``k`` of a job array (0-based) holds runs
+``[k * runs_per_task, (k + 1) * runs_per_task)``.
+
+The dataset of a sweep, under ``<results>/<name>/``::
+
+    <table>/<key>=<value>/.../seed=<N>/part-0.parquet   one file per run and table
+    _failed/<run id>.json                               runs that raised, with the error
+    collected.parquet                                   `sweep collect`: one row per run
+    <name>.sbatch, _logs/                               `sweep plan`: job-array script, its logs
+
+``<table>`` is each of ``orders, attempts, fleet, timeseries, summary``, so every table is
+its own hive dataset that pandas, pyarrow and DuckDB read as one table. The partition keys
+are the grid's parameter names (bare), then ``seed``; values are ``str(value)`` of the
+config's value (``15.0``, ``3``, ``random``), percent-encoded as hive readers expect. A
+file holds no column named like a partition key (only ``summary`` repeats config values:
+they come back from the path), because readers refuse a column that is both. Directories
+starting with ``_`` are skipped by dataset readers.
+
+A run is done when its ``summary`` file (written last, atomically, like every file) exists
+and carries the run's config: a sweep started again skips done runs and redoes the others,
+replacing what an interrupted attempt wrote. (A kill in the middle of a write can leave a
+hidden ``.part-0.parquet.<pid>.tmp``, which readers ignore.)
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import os
+import re
+import shlex
+import sys
+import time
+import tomllib
+import traceback
+from dataclasses import dataclass, fields
+from pathlib import Path
+from urllib.parse import quote
+
+from .config import PARAMETERS, Config, ConfigError, _resolve_key, default_config, load_config, replace
+
+#: Environment variables that give a job-array task's index, with the index of the
+#: scheduler's first task: SGE and LSF arrays start at 1, so their task k is index k + 1.
+TASK_VARIABLES = (("SLURM_ARRAY_TASK_ID", 0), ("PBS_ARRAY_INDEX", 0), ("SGE_TASK_ID", 1), ("LSB_JOBINDEX", 1))
+
+_SECTIONS = ("sweep", "set", "grid")
+_SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task")
+_SEED_RANGE_KEYS = ("start", "count")
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+
+
+class SweepError(ConfigError):
+    """A sweep file, task or results directory that cannot be used; the message says why."""
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a sweep: its resolved config and the partition keys that place it."""
+
+    config: Config
+    keys: tuple[str, ...]   # the grid's parameter names, then "seed"
+
+    @property
+    def partition(self) -> str:
+        """Hive path of the run, e.g. ``rule=random/tau_minutes=15.0/seed=3``."""
+        return "/".join(f"{key}={quote(str(getattr(self.config, key)), safe='')}" for key in self.keys)
+
+    @property
+    def id(self) -> str:
+        """The partition as one file name: ``rule=random,tau_minutes=15.0,seed=3``."""
+        return self.partition.replace("/", ",")  # values are encoded, so "/" and "," only separate
+
+    def path(self, out: Path, table: str) -> Path:
+        """The run's file of ``table`` in the dataset ``out``."""
+        return out / table / self.partition / "part-0.parquet"
+
+    def failure_path(self, out: Path) -> Path:
+        return out / "_failed" / f"{self.id}.json"
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A sweep file, read and validated: its grid, seeds and every run's config."""
+
+    path: Path                        # the sweep file, absolute
+    name: str
+    grid: dict[str, tuple]            # parameter name -> values, as the config holds them
+    seeds: tuple[int, ...]
+    runs_per_task: int
+    runs: tuple[Run, ...]             # in task order
+    text: str                         # the file's content, kept in collected.parquet
+
+    @property
+    def n_tasks(self) -> int:
+        return math.ceil(len(self.runs) / self.runs_per_task)
+
+    def task(self, k: int) -> tuple[Run, ...]:
+        """The runs of job-array task ``k`` (0-based)."""
+        if not 0 <= k < self.n_tasks:
+            raise SweepError(f"task {k} does not exist: sweep {self.name} has {self.n_tasks} tasks, "
+                             f"0-{self.n_tasks - 1} ({self.runs_per_task} runs each)")
+        return self.runs[k * self.runs_per_task:(k + 1) * self.runs_per_task]
+
+    def describe(self) -> str:
+        """``3 rule x 6 tau_minutes x 20 seeds = 360 runs``."""
+        factors = [f"{len(values)} {key}" for key, values in self.grid.items()] + [f"{len(self.seeds)} seeds"]
+        return f"{' x '.join(factors)} = {len(self.runs)} runs"
+
+
+# --------------------------------------------------------------------------- reading a sweep file
+
+
+def _check_names(table: dict, allowed: tuple[str, ...], where: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise SweepError(f"{where}: unknown key {key!r}. Allowed: {', '.join(allowed)}")
+
+
+def _parameters(table, where: str) -> dict:
+    """The entries of [set] or [grid] by parameter name; keys are ``section.key`` or bare.
+
+    TOML reads ``auction.rule = ...`` as a table ``auction`` holding ``rule``: one level of
+    nesting is a section.
+    """
+    if not isinstance(table, dict):
+        raise SweepError(f"{where} must be a table of key = value")
+    out = {}
+    for key, value in table.items():
+        entries = [(f"{key}.{k}", v) for k, v in value.items()] if isinstance(value, dict) else [(key, value)]
+        for text, v in entries:
+            try:
+                name = _resolve_key(text)
+            except ConfigError as error:
+                raise SweepError(f"{where}: {error}", error.keys) from None
+            if name == "seed":
+                raise SweepError(f"{where}: seed cannot be set here: the seeds are [sweep] seeds", ["seed"])
+            if name in out:
+                raise SweepError(f"{where}: {name} is given twice", [name])
+            out[name] = v
+    return out
+
+
+def _repeated(values: list):
+    """The first value that equals an earlier one (15 equals 15.0), or None."""
+    return next((v for i, v in enumerate(values) if v in values[:i]), None)
+
+
+def _grid(table, where: str) -> dict[str, list]:
+    grid = _parameters(table, where)
+    if not grid:
+        raise SweepError(f"{where} is empty: a sweep needs at least one key with a list of values "
+                         "(to sweep seeds only, give one value: rule = [\"least_confident\"])")
+    for name, values in grid.items():
+        if PARAMETERS[name].type is tuple:
+            raise SweepError(f"{where}: {name} holds a list of numbers and cannot be a grid key "
+                             "(a partition value is one number or string); set it in [set] or the base",
+                             [name])
+        if not isinstance(values, list):
+            raise SweepError(f"{where}: {name} must be a list of values, got {values!r} "
+                             "(a fixed value goes in [set])", [name])
+        if not values:
+            raise SweepError(f"{where}: {name} is an empty list: it would make no runs", [name])
+        if (value := _repeated(values)) is not None:
+            raise SweepError(f"{where}: {name} lists {value!r} more than once", [name])
+    return grid
+
+
+def _seeds(value, where: str) -> tuple:
+    """``[0, 1, 2]`` or ``{ start = 0, count = 20 }`` -> the seeds (each then checked by Config)."""
+    if isinstance(value, dict):
+        _check_names(value, _SEED_RANGE_KEYS, where)
+        start, count = value.get("start", 0), value.get("count")
+        if not all(isinstance(x, int) and not isinstance(x, bool) for x in (start, count)) or count < 1:
+            raise SweepError(f"{where}: a range is {{ start = <integer>, count = <integer >= 1> }}, "
+                             f"got {value!r}", ["seed"])
+        return tuple(range(start, start + count))
+    if isinstance(value, list) and value:
+        if (seed := _repeated(value)) is not None:
+            raise SweepError(f"{where}: seed {seed!r} is listed more than once", ["seed"])
+        return tuple(value)
+    raise SweepError(f"{where}: give a non-empty list (seeds = [0, 1, 2]) or a range "
+                     f"(seeds = {{ start = 0, count = 20 }}), got {value!r}", ["seed"])
+
+
+def load_sweep(path, changes=None, seeds=None) -> Sweep:
+    """Read and validate a sweep file: every run's config is built here, before any run.
+
+    ``changes`` (config keys -> values, as in ``[set]``) override the file's ``[set]``, and
+    ``seeds`` (a list of ints) its seeds: a quicker variant of the same sweep, say.
+
+    Raises
+    ------
+    SweepError
+        Unreadable file, unknown section or key (the message lists the allowed ones), an
+        empty or missing grid, a value given twice, or any config value that the config
+        refuses (the message names the key, the grid point and what is allowed).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+        doc = tomllib.loads(text)
+    except OSError as error:
+        raise SweepError(f"cannot read sweep file {str(path)!r}: {error.strerror or error}") from None
+    except tomllib.TOMLDecodeError as error:
+        raise SweepError(f"cannot parse sweep file {str(path)!r}: {error}") from None
+    _check_names(doc, _SECTIONS, f"{path}: sections")
+    head = doc.get("sweep", {})
+    if not isinstance(head, dict):
+        raise SweepError(f"{path}: [sweep] must be a table")
+    _check_names(head, _SWEEP_KEYS, f"{path}: [sweep]")
+
+    name = head.get("name", path.stem)
+    if not isinstance(name, str) or not _NAME.fullmatch(name):
+        raise SweepError(f"{path}: [sweep] name = {name!r}: use letters, digits, '.', '_' and '-', "
+                         "starting with a letter or digit (it names the results directory)")
+    runs_per_task = head.get("runs_per_task", 10)
+    if not isinstance(runs_per_task, int) or isinstance(runs_per_task, bool) or runs_per_task < 1:
+        raise SweepError(f"{path}: [sweep] runs_per_task must be an integer >= 1, got {runs_per_task!r}")
+    base = head.get("base")
+    if base is not None and not isinstance(base, str):
+        raise SweepError(f"{path}: [sweep] base must be a path (string), got {base!r}")
+
+    fixed = _parameters(doc.get("set", {}), f"{path}: [set]")
+    fixed.update(_parameters(dict(changes or {}), f"{path}: changes"))
+    grid = _grid(doc.get("grid", {}), f"{path}: [grid]")
+    both = [key for key in grid if key in fixed]
+    if both:
+        raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in [grid]", both)
+    seeds = _seeds(head.get("seeds") if seeds is None else list(seeds), f"{path}: [sweep] seeds")
+
+    try:
+        config = default_config() if base is None else load_config(path.parent / base)
+    except ConfigError as error:
+        raise SweepError(f"{path}: [sweep] base: {error}", error.keys) from None
+    try:
+        config = replace(config, **fixed)
+    except ConfigError as error:
+        raise SweepError(f"{path}: [set]: {error}", error.keys) from None
+    for seed in seeds:
+        try:
+            replace(config, seed=seed)
+        except ConfigError as error:
+            raise SweepError(f"{path}: [sweep] seeds: {error}", error.keys) from None
+    keys = (*grid, "seed")
+    runs = []
+    for point in itertools.product(*grid.values()):
+        changes = dict(zip(grid, point))
+        try:
+            at_point = replace(config, **changes)
+        except ConfigError as error:
+            where = ", ".join(f"{k} = {v!r}" for k, v in changes.items())
+            raise SweepError(f"{path}: [grid] at {where}: {error}", error.keys) from None
+        runs.extend(Run(replace(at_point, seed=seed), keys) for seed in seeds)
+    values = {key: tuple(dict.fromkeys(getattr(run.config, key) for run in runs)) for key in grid}
+    return Sweep(path.absolute(), name, values, seeds, runs_per_task, tuple(runs), text)
+
+
+# --------------------------------------------------------------------------- one run
+
+
+def _write_atomic(path: Path, write) -> None:
+    """``write(tmp)`` a sibling temporary file, then rename it to ``path``: never a partial file."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def execute(run: Run, out: Path) -> str | None:
+    """Simulate ``run`` and write its tables into the dataset ``out``.
+
+    A run that raises is recorded in ``_failed/<run id>.json`` (error, traceback, config)
+    and its error returned as one line; a run that succeeds removes any such record and
+    returns None. Runs in worker processes, so it imports the engine here.
+    """
+    from .records import tables, write_table
+    from .simulation import simulate
+
+    failure = run.failure_path(out)
+    try:
+        # Files of an interrupted attempt are replaced, not deleted first: two processes that
+        # happen to run the same run (a task submitted twice) then write the same bytes safely.
+        for table, data in tables(simulate(run.config)).items():  # summary last
+            path = run.path(out, table)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write_table(data.drop_columns([k for k in run.keys if k in data.column_names]), path, run.config)
+    except Exception as error:  # recorded, and the sweep goes on with the other runs
+        record = {"run": run.partition, "error": f"{type(error).__name__}: {error}",
+                  "traceback": traceback.format_exc(), "config": run.config.to_dict()}
+        failure.parent.mkdir(parents=True, exist_ok=True)
+        _write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
+        return record["error"]
+    failure.unlink(missing_ok=True)
+    return None
+
+
+def _config_difference(a: Config, b: Config) -> str:
+    return ", ".join(f"{f.name} {getattr(a, f.name)!r} vs {getattr(b, f.name)!r}"
+                     for f in fields(Config) if getattr(a, f.name) != getattr(b, f.name))
+
+
+def state(run: Run, out: Path) -> str:
+    """``done``, ``failed`` or ``missing``: where ``run`` stands in the dataset ``out``.
+
+    Raises SweepError if the run's summary was made with another config (the sweep file
+    changed since): new results would silently mix with old ones.
+    """
+    from .records import read_config
+
+    summary = run.path(out, "summary")
+    if summary.exists():
+        found = read_config(summary)
+        if found != run.config:
+            raise SweepError(f"{summary} was made with another config ({_config_difference(found, run.config)}); "
+                             f"write to another --results root, or remove {out} to start again")
+        return "done"
+    return "failed" if run.failure_path(out).exists() else "missing"
+
+
+# --------------------------------------------------------------------------- running a sweep
+
+
+def task_from_environment(environ=os.environ) -> int | None:
+    """The 0-based job-array task given by the scheduler's variable (:data:`TASK_VARIABLES`), if any.
+
+    SGE sets ``SGE_TASK_ID=undefined`` and LSF ``LSB_JOBINDEX=0`` outside arrays: no task.
+    """
+    for variable, first in TASK_VARIABLES:
+        value = environ.get(variable, "")
+        if value.isdigit() and int(value) >= first:
+            return int(value) - first
+    return None
+
+
+def available_cpus() -> int:
+    """CPUs this process may run on: a batch job's allocation, not the whole node."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # macOS, Windows
+        return os.cpu_count() or 1
+
+
+class Progress:
+    """A one-line count of finished runs on stderr, drawn only on a terminal."""
+
+    def __init__(self, stream=sys.stderr, width=32):
+        self.stream, self.width = stream, width
+        self.enabled = stream.isatty()
+        self.start = time.perf_counter()
+
+    def __call__(self, finished, total, failed):
+        if not self.enabled:
+            return
+        bar = int(self.width * finished / total)
+        self.stream.write(f"\r  runs {finished}/{total} [{'#' * bar}{'.' * (self.width - bar)}] "
+                          f"{failed} failed, {_duration(time.perf_counter() - self.start)}")
+        if finished == total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def _duration(seconds: float) -> str:
+    minutes, rest = divmod(seconds, 60.0)
+    return f"{int(minutes)} min {rest:04.1f} s" if minutes else f"{rest:.1f} s"
+
+
+def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | None = None,
+              progress=None) -> tuple[int, dict[Run, str]]:
+    """Execute those of ``runs`` (of ``sweep``) that are not done, into the dataset ``out``.
+
+    Locally on ``jobs`` processes, or, with ``scheduler`` (a Dask scheduler address), one
+    Dask task per run (the workers write the files: ``out`` must be on a filesystem they
+    share). ``progress(finished, to_run, failed)`` is called after every run. Returns the
+    number of runs executed and the failed ones with their errors.
+    """
+    from functools import partial
+
+    from . import executors
+
+    todo = [run for run in runs if state(run, out) != "done"]
+    out = out.absolute()  # workers may have another working directory
+    out.mkdir(parents=True, exist_ok=True)
+    function = partial(execute, out=out)
+    if scheduler is None:
+        results = executors.local(function, todo, jobs)
+    else:
+        results = executors.dask(function, todo, scheduler, keys=[f"{sweep.name}/{run.id}" for run in todo])
+    failures = {}
+    for finished, (run, error) in enumerate(results, start=1):
+        if error is not None:
+            failures[run] = error
+        if progress is not None:
+            progress(finished, len(todo), len(failures))
+    return len(todo), failures
+
+
+# --------------------------------------------------------------------------- job arrays, the summary table
+
+
+def _ranges(numbers) -> str:
+    """Sorted integers as job-array ranges: [0, 1, 2, 5, 7, 8] -> '0-2,5,7-8'."""
+    groups = itertools.groupby(enumerate(numbers), key=lambda pair: pair[1] - pair[0])
+    spans = [[n for _, n in group] for _, group in groups]
+    return ",".join(str(s[0]) if len(s) == 1 else f"{s[0]}-{s[-1]}" for s in spans)
+
+
+def job_script(sweep: Sweep, results: Path, time_limit=None, partition=None, account=None) -> str:
+    """A SLURM job-array script running every task of ``sweep`` into ``results``/<name>.
+
+    Paths are absolute and the python is this one (``sys.executable``), so the script works
+    from any directory; it changes to the current directory, against which config paths
+    (``run.fleet_file``) are resolved.
+    """
+    results = results.absolute()
+    out = results / sweep.name
+    options = [f"--job-name=dronefleet-{sweep.name}", f"--array=0-{sweep.n_tasks - 1}", "--cpus-per-task=1",
+               f"--output={out / '_logs' / '%A_%a.out'}"]
+    options += [f"--{flag}={value}" for flag, value in
+                (("time", time_limit), ("partition", partition), ("account", account)) if value]
+    command = " ".join(shlex.quote(str(word)) for word in
+                       (sys.executable, "-m", "dronefleet.cli", "sweep", "run", sweep.path, "--results", results))
+    return "\n".join([
+        "#!/bin/bash",
+        f"# Job array of the dronefleet sweep {sweep.name} ({sweep.path}):",
+        f"# {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs.",
+        "# Written by `dronefleet sweep plan`; submit it with `sbatch` (on its own, or with --array=<tasks>",
+        "# to rerun some): a task skips its runs that are done and redoes the others.",
+        *(f"#SBATCH {option}" for option in options),
+        "set -euo pipefail",
+        f"cd {shlex.quote(str(Path.cwd()))}",
+        "# numba caches the compiled engine beside the installed package (or under ~/.cache if that",
+        "# is read-only). On a cluster both may be unwritable or not shared, and then every task",
+        "# compiles the engine again (~20 s). This cache, on the shared results filesystem, is",
+        "# filled by the first tasks and loaded by the others.",
+        f"export NUMBA_CACHE_DIR=\"${{NUMBA_CACHE_DIR:-{results / '_numba_cache'}}}\"",
+        f"exec {command} --task-id \"$SLURM_ARRAY_TASK_ID\"",
+        "",
+    ])
+
+
+def collect(sweep: Sweep, out: Path):
+    """One row per done run, in run order: its partition values (grid keys, seed), then its summary.
+
+    Written atomically to ``out/collected.parquet``, with the sweep file in the metadata
+    (``dronefleet.sweep``). Returns ``(table, the runs not done)``.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from . import __version__
+
+    rows, not_done = [], []
+    for run in sweep.runs:
+        if state(run, out) != "done":
+            not_done.append(run)
+            continue
+        summary = pq.read_table(run.path(out, "summary"))
+        rows.append(pa.table({**{key: [getattr(run.config, key)] for key in run.keys},
+                              **dict(zip(summary.column_names, summary.columns))}))
+    if not rows:
+        raise SweepError(f"no run of sweep {sweep.name} is done in {out}")
+    table = pa.concat_tables(rows).replace_schema_metadata(
+        {b"dronefleet.sweep": sweep.text, b"dronefleet.version": __version__})
+    _write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
+    return table, not_done
+
+
+def dataset(sweep: Sweep, out, table: str):
+    """``table`` of the sweep, in the dataset directory ``out`` (``results/<name>``), as one
+    ``pyarrow.dataset.Dataset`` whose partition columns have the config's types.
+
+    (Read without a schema, hive partition values come back as strings or int32:
+    ``tau_minutes=15.0`` as the string ``"15.0"``.)
+    """
+    import pyarrow as pa
+    import pyarrow.dataset as ds
+
+    types = {float: pa.float64(), int: pa.int64(), str: pa.string()}
+    schema = pa.schema([(key, types[PARAMETERS[key].type]) for key in sweep.runs[0].keys])
+    return ds.dataset(Path(out) / table, format="parquet", partitioning=ds.partitioning(schema, flavor="hive"))
+
+
+# --------------------------------------------------------------------------- the commands (see cli.py)
+
+
+def _open(args) -> tuple[Sweep, Path]:
+    sweep = load_sweep(args.sweep)
+    return sweep, Path(args.results) / sweep.name
+
+
+def plan_command(args) -> int:
+    """``dronefleet sweep plan``: print the runs and tasks, write the job-array script."""
+    sweep, out = _open(args)
+    script = Path(args.out) if args.out else out / f"{sweep.name}.sbatch"
+    (out / "_logs").mkdir(parents=True, exist_ok=True)  # SLURM does not create the log directory
+    script.parent.mkdir(parents=True, exist_ok=True)
+    script.write_text(job_script(sweep, Path(args.results), args.time, args.partition, args.account))
+    print(f"sweep {sweep.name}: {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs")
+    print(f"  job-array script  {script}")
+    print(f"  submit it with    sbatch {script}")
+    return 0
+
+
+def run_command(args) -> int:
+    """``dronefleet sweep run``: one task's runs, or all of them (local processes or Dask)."""
+    sweep, out = _open(args)
+    task = args.task_id if args.task_id is not None else task_from_environment()
+    if args.scheduler is not None and args.executor != "dask":
+        raise SweepError("--scheduler is the address of a Dask scheduler: use it with --executor dask")
+    if args.executor == "dask" and (args.scheduler is None or task is not None):
+        raise SweepError("--executor dask runs every run of the sweep on the cluster at --scheduler ADDRESS "
+                         "(e.g. tcp://10.0.0.1:8786), without a task id")
+    runs = sweep.runs if task is None else sweep.task(task)
+    jobs = args.jobs or (1 if task is not None else available_cpus())
+    where = (f"on the Dask cluster at {args.scheduler}" if args.executor == "dask"
+             else f"on {jobs} process{'es' if jobs > 1 else ''}")
+    print(f"sweep {sweep.name}: {sweep.describe()}; "
+          f"{'all runs' if task is None else f'task {task}: {len(runs)} runs'} {where}", flush=True)
+    start = time.perf_counter()
+    try:
+        ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
+    except KeyboardInterrupt:
+        print(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on",
+              file=sys.stderr)
+        return 130  # the shell's code for a command stopped by Ctrl-C
+    wall = time.perf_counter() - start
+    print(f"sweep {sweep.name}: ran {ran}, skipped {len(runs) - ran} done before, {len(failures)} failed, "
+          f"in {_duration(wall)}; dataset {out}")
+    for run, error in failures.items():
+        print(f"  failed  {run.partition}: {error}", file=sys.stderr)
+    return 1 if failures else 0
+
+
+def status_command(args) -> int:
+    """``dronefleet sweep status``: done, missing and failed runs (with their errors)."""
+    sweep, out = _open(args)
+    found = [state(run, out) for run in sweep.runs]
+    print(f"sweep {sweep.name}: {sweep.describe()} in {out}: " +
+          ", ".join(f"{found.count(s)} {s}" for s in ("done", "missing", "failed")))
+    for run, s in zip(sweep.runs, found):
+        if s == "failed":
+            print(f"  failed   {run.partition}: {json.loads(run.failure_path(out).read_text())['error']}")
+    unfinished = sorted({i // sweep.runs_per_task for i, s in enumerate(found) if s != "done"})
+    if unfinished:
+        print(f"  tasks with runs not done: {_ranges(unfinished)} (rerun them: sweep run --task-id N, "
+              f"or sbatch --array={_ranges(unfinished)} on the plan's script)")
+    return 0 if not unfinished else 1
+
+
+def collect_command(args) -> int:
+    """``dronefleet sweep collect``: the summary table of the done runs, as parquet."""
+    sweep, out = _open(args)
+    table, not_done = collect(sweep, out)
+    print(f"sweep {sweep.name}: {table.num_rows} of {len(sweep.runs)} runs in {out / 'collected.parquet'} "
+          f"({table.num_columns} columns)")
+    if not_done:
+        print(f"  {len(not_done)} runs are not done (see sweep status); they have no row", file=sys.stderr)
+    return 1 if not_done else 0

@@ -1,0 +1,405 @@
+"""Parameter sweeps (dronefleet.sweep): sweep files, tasks, the dataset, resumption, failures, Dask."""
+
+import io
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from urllib.parse import unquote
+
+import distributed
+import duckdb
+import pandas as pd
+import pyarrow.dataset as ds
+import pyarrow.parquet as pq
+import pytest
+
+from dronefleet import cli, simulation, sweep as sw
+from dronefleet.config import default_config, replace
+from dronefleet.records import TABLES
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+SMOKE = CONFIGS / "sweeps" / "smoke.toml"
+GRID = ("rule", "tau_minutes", "seed")
+
+
+def write(tmp_path, text, name="s.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def parquet_bytes(out):
+    """Every table file of a sweep's dataset, by relative path."""
+    return {p.relative_to(out): p.read_bytes() for table in TABLES for p in sorted((out / table).rglob("*.parquet"))}
+
+
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory):
+    """The smoke sweep run once on two local processes: (sweep, dataset directory)."""
+    results = tmp_path_factory.mktemp("results")
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(results), "--jobs", "2"]) == 0
+    return sw.load_sweep(SMOKE), results / "smoke"
+
+
+# ---------------------------------------------------------------------------- sweep files
+
+
+def test_fig16_is_the_papers_grid_in_a_fixed_order():
+    s = sw.load_sweep(CONFIGS / "sweeps" / "fig16.toml")
+    assert (s.name, len(s.runs), s.runs_per_task, s.n_tasks) == ("fig16", 360, 10, 36)
+    assert s.describe() == "3 rule x 6 tau_minutes x 20 seeds = 360 runs"
+    assert s.grid == {"rule": ("least_confident", "most_confident", "random"),
+                      "tau_minutes": (15.0, 20.0, 25.0, 30.0, 35.0, 40.0)}
+    # grid product in key order, seeds innermost
+    assert [r.partition for r in s.runs[:2]] == ["rule=least_confident/tau_minutes=15.0/seed=0",
+                                                 "rule=least_confident/tau_minutes=15.0/seed=1"]
+    assert s.runs[20].partition == "rule=least_confident/tau_minutes=20.0/seed=0"
+    assert s.runs[-1].partition == "rule=random/tau_minutes=40.0/seed=19"
+    paper = default_config()
+    assert s.runs[-1].config == replace(paper, rule="random", tau_minutes=40.0, seed=19)
+    assert s.task(35) == s.runs[350:]
+
+
+def test_keys_as_section_key_dotted_or_bare_and_base_relative_to_the_file(tmp_path):
+    (tmp_path / "configs").mkdir()
+    (tmp_path / "configs" / "base.toml").write_text("[fleet]\nn_uavs = 7\n")
+    path = write(tmp_path / "configs", '[sweep]\nbase = "base.toml"\nseeds = [4]\n[set]\n"energy.xi" = 0.25\n'
+                 '[grid]\nauction.rule = ["random"]\ntau_minutes = [20]\n', name="mine.toml")
+    s = sw.load_sweep(path)
+    assert s.name == "mine" and s.runs_per_task == 10
+    (run,) = s.runs
+    assert (run.config.n_uavs, run.config.xi, run.config.rule, run.config.tau_minutes, run.config.seed) == \
+        (7, 0.25, "random", 20.0, 4)
+    assert run.partition == "rule=random/tau_minutes=20.0/seed=4"
+
+
+GOOD = '[sweep]\nseeds = [0, 1]\n[grid]\nrule = ["least_confident", "random"]\n'
+
+
+def test_changes_and_seeds_make_a_variant_of_a_sweep_file():
+    s = sw.load_sweep(SMOKE, changes={"horizon_weeks": 2.0, "fleet.n_uavs": 5}, seeds=[7])
+    assert s.seeds == (7,) and len(s.runs) == 4
+    assert {(r.config.horizon_weeks, r.config.n_uavs, r.config.seed) for r in s.runs} == {(2.0, 5, 7)}
+    with pytest.raises(sw.SweepError, match="tau_minutes is both fixed"):
+        sw.load_sweep(SMOKE, changes={"tau_minutes": 20.0})
+    with pytest.raises(sw.SweepError, match="changes: unknown key 'horizon'"):
+        sw.load_sweep(SMOKE, changes={"horizon": 2.0})
+
+
+@pytest.mark.parametrize("text, message", [
+    (GOOD + "[extra]\nx = 1\n", "unknown key 'extra'. Allowed: sweep, set, grid"),
+    (GOOD.replace("[sweep]\n", "[sweep]\nrepeats = 3\n"), "unknown key 'repeats'. Allowed: name, base, seeds"),
+    (GOOD + "tau_minute = [15]\n", "unknown key 'tau_minute' (did you mean 'tau_minutes'?)"),
+    (GOOD + "[set]\nfleet.speed_m_s = 3\n", "fleet.speed_m_s is not a key of [fleet]; speed_m_s belongs in [energy]"),
+    (GOOD + "tau_minutes = []\n", "[grid]: tau_minutes is an empty list"),
+    ('[sweep]\nseeds = [0]\n[grid]\n', "[grid] is empty"),
+    ('[sweep]\nseeds = [0]\n', "[grid] is empty"),
+    (GOOD + "tau_minutes = [15, 15.0]\n", "tau_minutes lists 15.0 more than once"),
+    (GOOD + "tau_minutes = 15\n", "tau_minutes must be a list of values, got 15"),
+    (GOOD + "seed = [1, 2]\n", "seed cannot be set here"),
+    (GOOD + "scaler_mean = [[1, 2, 3]]\n", "scaler_mean holds a list of numbers and cannot be a grid key"),
+    (GOOD + "[set]\nrule = 'random'\n", "rule is both fixed ([set] or changes) and in [grid]"),
+    (GOOD.replace('"random"]', '"nope"]'),
+     "[grid] at rule = 'nope': auction.rule = 'nope' is not a registered winner rule"),
+    (GOOD + "tau_minutes = [15, -5]\n", "orders.tau_minutes = -5 is out of range: allowed > 0"),
+    (GOOD + "soh_min = [0.9]\n[set]\nsoh_max = 0.8\n", "fleet.soh_min = 0.9 must be <= fleet.soh_max = 0.8"),
+    (GOOD + "[set]\nn_uavs = 2.5\n", "[set]: fleet.n_uavs must be an integer"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = []"), "give a non-empty list"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = [0, 0]"), "seed 0 is listed more than once"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = [-1]"), "[sweep] seeds: run.seed = -1 is out of range: allowed >= 0"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = [0.5]"), "[sweep] seeds: run.seed must be an integer, got float"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = { start = 3 }"), "a range is { start = <integer>, count = <integer >= 1> }"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = { start = -2, count = 3 }"), "run.seed = -2 is out of range"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = { count = 2, step = 2 }"), "unknown key 'step'"),
+    (GOOD.replace("seeds = [0, 1]\n", ""), "give a non-empty list"),
+    (GOOD.replace("[sweep]\n", "[sweep]\nname = '../up'\n"), "name = '../up'"),
+    (GOOD.replace("[sweep]\n", "[sweep]\nruns_per_task = 0\n"), "runs_per_task must be an integer >= 1"),
+    (GOOD.replace("[sweep]\n", "[sweep]\nbase = 'missing.toml'\n"), "cannot read config file"),
+    ("[sweep\n", "cannot parse sweep file"),
+])
+def test_bad_sweep_files_are_refused_before_any_run(tmp_path, capsys, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(sw.SweepError) as error:
+        sw.load_sweep(path)
+    assert message in str(error.value)
+    results = tmp_path / "results"
+    assert cli.main(["sweep", "run", str(path), "--results", str(results)]) == 2
+    assert message in capsys.readouterr().err
+    assert not results.exists()
+
+
+def test_partition_values_round_trip_through_their_text():
+    config = replace(default_config(), fleet_file="fleets/a b,{seed}=1%.parquet", tau_minutes=1e-5, seed=12)
+    run = sw.Run(config, ("fleet_file", "tau_minutes", "n_uavs", "seed"))
+    assert run.partition == "fleet_file=fleets%2Fa%20b%2C%7Bseed%7D%3D1%25.parquet/tau_minutes=1e-05/n_uavs=25/seed=12"
+    assert "/" not in run.id and run.id.count(",") == 3
+    for segment, key in zip(run.partition.split("/"), run.keys):
+        name, _, text = segment.partition("=")
+        value = getattr(config, key)
+        assert name == key and type(value)(unquote(text)) == value
+
+
+# ---------------------------------------------------------------------------- tasks and the job script
+
+
+@pytest.mark.parametrize("variable, index, task", [
+    ("SLURM_ARRAY_TASK_ID", "2", 2), ("PBS_ARRAY_INDEX", "0", 0),
+    ("SGE_TASK_ID", "3", 2), ("LSB_JOBINDEX", "1", 0),       # SGE and LSF arrays start at 1
+    ("SGE_TASK_ID", "undefined", None), ("LSB_JOBINDEX", "0", None),  # set outside array jobs
+])
+def test_the_task_comes_from_the_schedulers_variable(variable, index, task):
+    assert sw.task_from_environment({variable: index}) == task
+
+
+@pytest.mark.parametrize("variable, index", [("SLURM_ARRAY_TASK_ID", "1"), ("PBS_ARRAY_INDEX", "1"),
+                                             ("SGE_TASK_ID", "2"), ("LSB_JOBINDEX", "2")])
+def test_sweep_run_in_an_array_job_runs_only_its_task(tmp_path, monkeypatch, capsys, variable, index):
+    for name, _ in sw.TASK_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv(variable, index)
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path)]) == 0
+    assert "task 1: 3 runs on 1 process" in capsys.readouterr().out
+    s = sw.load_sweep(SMOKE)
+    assert [sw.state(run, tmp_path / "smoke") for run in s.runs] == ["missing"] * 3 + ["done"] * 3 + ["missing"] * 2
+
+
+def test_task_ids_beyond_the_array_are_refused(tmp_path, capsys):
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--task-id", "3"]) == 2
+    assert "task 3 does not exist: sweep smoke has 3 tasks, 0-2 (3 runs each)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("option, value", [("--jobs", "0"), ("--task-id", "-1"), ("--jobs", "two")])
+def test_counts_on_the_command_line_are_checked(capsys, option, value):
+    with pytest.raises(SystemExit) as exit:
+        cli.main(["sweep", "run", str(SMOKE), option, value])
+    assert exit.value.code == 2 and f"{option}: expected an integer" in capsys.readouterr().err
+
+
+def test_plan_writes_a_job_array_script(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["sweep", "plan", str(SMOKE), "--time", "00:10:00", "--partition", "short",
+                     "--account", "lab"]) == 0
+    printed = capsys.readouterr().out
+    assert "8 runs, 3 tasks of up to 3 runs" in printed
+    script = tmp_path / "results" / "smoke" / "smoke.sbatch"
+    assert f"sbatch {script.relative_to(tmp_path)}" in printed
+    text = script.read_text()
+    results = tmp_path / "results"
+    sbatch = [line for line in text.splitlines() if line.startswith("#SBATCH")]
+    assert sbatch == ["#SBATCH --job-name=dronefleet-smoke", "#SBATCH --array=0-2", "#SBATCH --cpus-per-task=1",
+                      f"#SBATCH --output={results}/smoke/_logs/%A_%a.out", "#SBATCH --time=00:10:00",
+                      "#SBATCH --partition=short", "#SBATCH --account=lab"]
+    assert (results / "smoke" / "_logs").is_dir()  # SLURM does not create it
+    assert f"\ncd {tmp_path}\n" in text
+    assert f'export NUMBA_CACHE_DIR="${{NUMBA_CACHE_DIR:-{results}/_numba_cache}}"' in text
+    assert text.rstrip().endswith(f"exec {sys.executable} -m dronefleet.cli sweep run {SMOKE} "
+                                  f"--results {results} --task-id \"$SLURM_ARRAY_TASK_ID\"")
+    out = tmp_path / "elsewhere.sh"
+    assert cli.main(["sweep", "plan", str(write(tmp_path, GOOD.replace("[sweep]\n", "[sweep]\nruns_per_task = 1\n"))),
+                     "--out", str(out)]) == 0
+    assert "#SBATCH --array=0-3\n" in out.read_text()
+
+
+def test_progress_is_one_line_on_a_terminal_only():
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    terminal, pipe = Terminal(), io.StringIO()
+    sw.Progress(terminal, width=8)(2, 8, 1)
+    sw.Progress(pipe)(2, 8, 1)
+    assert terminal.getvalue().startswith("\r  runs 2/8 [##......] 1 failed, ") and pipe.getvalue() == ""
+
+
+# ---------------------------------------------------------------------------- the dataset
+
+
+def test_each_table_reads_as_one_table_with_pandas_pyarrow_and_duckdb(smoke):
+    s, out = smoke
+    rows = {table: sum(pq.read_metadata(r.path(out, table)).num_rows for r in s.runs) for table in TABLES}
+    assert rows["summary"] == len(s.runs) == 8
+    for table in TABLES:
+        frames = {
+            "pandas": pd.read_parquet(out / table),
+            "pyarrow": ds.dataset(out / table, partitioning="hive").to_table().to_pandas(),
+            "duckdb": duckdb.sql(f"SELECT * FROM read_parquet('{out / table}/**/*.parquet', "
+                                 "hive_partitioning = true)").df(),
+        }
+        for reader, frame in frames.items():
+            assert len(frame) == rows[table], (table, reader)
+            assert list(frame.columns).count("seed") == 1
+            assert set(GRID) <= set(frame.columns), (table, reader)
+            assert set(frame.rule.astype(str)) == {"least_confident", "random"}
+            assert set(frame.tau_minutes.astype(float)) == {15.0, 30.0}
+    typed = sw.dataset(s, out, "summary").to_table().to_pandas()
+    assert typed.tau_minutes.dtype == "float64" and typed.seed.dtype == "int64"
+    assert sorted(zip(typed.rule, typed.tau_minutes, typed.seed)) == \
+        sorted((r.config.rule, r.config.tau_minutes, r.config.seed) for r in s.runs)
+
+
+def test_files_are_the_runs_tables_without_the_partition_columns(smoke):
+    s, out = smoke
+    run = s.runs[5]
+    expected = simulation.simulate(run.config)
+    from dronefleet.records import read_config, tables
+
+    for table, data in tables(expected).items():
+        path = run.path(out, table)
+        assert read_config(path) == run.config
+        written = pq.read_table(path)
+        kept = [c for c in data.column_names if c not in GRID]
+        assert written.column_names == kept
+        pd.testing.assert_frame_equal(written.to_pandas(), data.select(kept).to_pandas())
+
+
+def test_one_process_and_two_write_the_same_bytes(smoke, tmp_path):
+    s, out = smoke
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--jobs", "1"]) == 0
+    assert parquet_bytes(tmp_path / "smoke") == parquet_bytes(out)
+    assert len(parquet_bytes(out)) == len(TABLES) * len(s.runs)
+
+
+def test_collect_gives_one_row_per_run_with_its_parameters_and_metrics(smoke, capsys):
+    s, out = smoke
+    assert cli.main(["sweep", "collect", str(SMOKE), "--results", str(out.parent)]) == 0
+    assert "8 of 8 runs" in capsys.readouterr().out
+    table = pq.read_table(out / "collected.parquet")
+    assert table.schema.metadata[b"dronefleet.sweep"] == SMOKE.read_bytes()
+    frame = table.to_pandas()
+    summary = pq.read_table(s.runs[0].path(out, "summary")).column_names
+    assert list(frame.columns) == [*GRID, *summary]
+    assert (frame.tau_minutes.dtype, frame.seed.dtype) == ("float64", "int64")
+    assert list(zip(frame.rule, frame.tau_minutes, frame.seed)) == \
+        [(r.config.rule, r.config.tau_minutes, r.config.seed) for r in s.runs]
+    assert (frame.n_uavs == 10).all() and (frame.horizon_weeks == 1.0).all()
+    one = pq.read_table(s.runs[3].path(out, "summary")).to_pandas()
+    pd.testing.assert_frame_equal(frame.loc[[3], summary].reset_index(drop=True), one)
+
+
+def test_a_changed_sweep_file_is_refused_not_mixed(smoke, tmp_path, capsys):
+    _, out = smoke
+    changed = write(tmp_path, SMOKE.read_text().replace("n_uavs = 10", "n_uavs = 11"), name="smoke.toml")
+    assert cli.main(["sweep", "run", str(changed), "--results", str(out.parent)]) == 2
+    assert "was made with another config (n_uavs 10 vs 11)" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------- failures, status, resumption
+
+
+def test_a_run_that_raises_is_recorded_and_the_others_complete(tmp_path, monkeypatch, capsys):
+    real = simulation.simulate
+
+    def simulate(config):
+        if (config.rule, config.tau_minutes, config.seed) == ("random", 15.0, 1):
+            raise ValueError("injected failure")
+        return real(config)
+
+    monkeypatch.setattr(simulation, "simulate", simulate)
+    args = ["--results", str(tmp_path), "--jobs", "1"]
+    assert cli.main(["sweep", "run", str(SMOKE), *args]) == 1
+    assert "failed  rule=random/tau_minutes=15.0/seed=1: ValueError: injected failure" in capsys.readouterr().err
+    out = tmp_path / "smoke"
+    record = json.loads((out / "_failed" / "rule=random,tau_minutes=15.0,seed=1.json").read_text())
+    assert record["error"] == "ValueError: injected failure"
+    assert 'raise ValueError("injected failure")' in record["traceback"]
+    assert record["config"]["auction"]["rule"] == "random"
+
+    assert cli.main(["sweep", "status", str(SMOKE), "--results", str(tmp_path)]) == 1
+    printed = capsys.readouterr().out
+    assert "8 runs in" in printed and "7 done, 0 missing, 1 failed" in printed
+    assert "failed   rule=random/tau_minutes=15.0/seed=1: ValueError: injected failure" in printed
+    assert "tasks with runs not done: 1 " in printed  # run 5 of 8, 3 runs per task
+
+    monkeypatch.setattr(simulation, "simulate", real)
+    assert cli.main(["sweep", "run", str(SMOKE), *args]) == 0
+    assert "ran 1, skipped 7 done before, 0 failed" in capsys.readouterr().out
+    assert not (out / "_failed" / "rule=random,tau_minutes=15.0,seed=1.json").exists()
+    assert cli.main(["sweep", "status", str(SMOKE), "--results", str(tmp_path)]) == 0
+    assert "8 done, 0 missing, 0 failed" in capsys.readouterr().out
+
+
+def test_status_of_a_sweep_not_started(tmp_path, capsys):
+    assert cli.main(["sweep", "status", str(SMOKE), "--results", str(tmp_path)]) == 1
+    printed = capsys.readouterr().out
+    assert "0 done, 8 missing, 0 failed" in printed and "tasks with runs not done: 0-2" in printed
+    assert cli.main(["sweep", "collect", str(SMOKE), "--results", str(tmp_path)]) == 2
+    assert "no run of sweep smoke is done" in capsys.readouterr().err
+
+
+RESUME = """
+[sweep]
+name = "resume"
+seeds = [0, 1, 2, 3]
+[set]
+horizon_weeks = 2.0
+[grid]
+rule = ["least_confident", "random"]
+"""
+
+
+def test_a_killed_sweep_started_again_redoes_only_unfinished_runs(tmp_path, capsys):
+    path = write(tmp_path, RESUME, name="resume.toml")
+    s = sw.load_sweep(path)
+    killed, clean = tmp_path / "killed", tmp_path / "clean"
+    command = [sys.executable, "-m", "dronefleet.cli", "sweep", "run", str(path), "--results", str(killed),
+               "--jobs", "1"]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    summaries = [run.path(killed / "resume", "summary") for run in s.runs]
+    deadline = time.monotonic() + 120
+    while not any(p.exists() for p in summaries) and time.monotonic() < deadline:
+        time.sleep(0.002)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    done = [run for run in s.runs if sw.state(run, killed / "resume") == "done"]
+    assert 1 <= len(done) < len(s.runs), "the sweep was not stopped half-way"
+    before = {p: (p.stat().st_ino, p.stat().st_mtime_ns)
+              for run in done for p in (run.path(killed / "resume", t) for t in TABLES)}
+    # What a kill in the middle of the next run can leave: a partial table, a temporary file.
+    unfinished = s.runs[len(done)]
+    partial = unfinished.path(killed / "resume", "orders")
+    partial.parent.mkdir(parents=True, exist_ok=True)
+    partial.write_bytes(b"not parquet")
+    (partial.parent / ".part-0.parquet.999.tmp").write_bytes(b"half")
+
+    assert cli.main(["sweep", "run", str(path), "--results", str(killed), "--jobs", "1"]) == 0
+    assert f"ran {len(s.runs) - len(done)}, skipped {len(done)} done before" in capsys.readouterr().out
+    assert {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in before} == before
+    assert cli.main(["sweep", "run", str(path), "--results", str(clean), "--jobs", "1"]) == 0
+    assert parquet_bytes(killed / "resume") == parquet_bytes(clean / "resume")
+    assert len(parquet_bytes(clean / "resume")) == len(TABLES) * len(s.runs)
+    # The leftover temporary file is hidden from readers.
+    assert len(pd.read_parquet(killed / "resume" / "orders")) == len(pd.read_parquet(clean / "resume" / "orders"))
+    assert len(duckdb.sql(f"SELECT * FROM read_parquet('{killed / 'resume' / 'orders'}/**/*.parquet', "
+                          "hive_partitioning = true)").df()) == len(pd.read_parquet(clean / "resume" / "orders"))
+
+
+# ---------------------------------------------------------------------------- Dask
+
+
+def test_dask_executor_writes_the_same_dataset(smoke, tmp_path, capsys):
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--executor", "dask",
+                         "--scheduler", cluster.scheduler_address]) == 0
+    assert f"on the Dask cluster at {cluster.scheduler_address}" in capsys.readouterr().out
+    assert parquet_bytes(tmp_path / "smoke") == parquet_bytes(smoke[1])
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--executor", "dask"], "--executor dask runs every run of the sweep on the cluster at --scheduler"),
+    (["--executor", "dask", "--scheduler", "tcp://127.0.0.1:1", "--task-id", "0"], "without a task id"),
+    (["--scheduler", "tcp://127.0.0.1:1"], "use it with --executor dask"),
+])
+def test_dask_options_are_checked(tmp_path, capsys, args, message):
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), *args]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_without_dask_the_executor_says_what_to_install(tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--executor", "dask",
+                     "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    assert "pip install 'dronefleet[dask]'" in capsys.readouterr().err

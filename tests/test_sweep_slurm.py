@@ -1,0 +1,77 @@
+"""A real SLURM: the job-array script of `sweep plan`, submitted to a one-node cluster on
+this machine, writes the very dataset that a local `sweep run` writes.
+
+Needs Debian's slurm-wlm and munge (`.ci/run` installs them) and root, to start the
+daemons; skipped, saying which is missing, otherwise. ``tests/slurm/cluster.sh`` starts
+munged, slurmctld and slurmd on localhost (or reuses them if already up from the same
+directory), and stops them at the end.
+"""
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from dronefleet import cli
+from dronefleet.records import TABLES
+
+SMOKE = Path(__file__).resolve().parents[1] / "configs" / "sweeps" / "smoke.toml"
+CLUSTER = Path(__file__).resolve().parent / "slurm" / "cluster.sh"
+STATE = Path(tempfile.gettempdir()) / "dronefleet-slurm"
+SEARCH = f"{os.environ.get('PATH', '')}:/usr/sbin:/sbin"
+MISSING = [b for b in ("munged", "slurmctld", "slurmd", "sbatch", "sinfo") if shutil.which(b, path=SEARCH) is None]
+
+pytestmark = [
+    pytest.mark.skipif(bool(MISSING), reason=f"SLURM is not installed (no {', '.join(MISSING)}); "
+                                             "apt-get install slurm-wlm munge"),
+    pytest.mark.skipif(os.geteuid() != 0, reason="starting slurmctld and slurmd needs root"),
+]
+
+
+@pytest.fixture(scope="module")
+def slurm():
+    """A running one-node cluster: the environment for its clients (SLURM_CONF, PATH)."""
+    env = {**os.environ, "SLURM_CONF": str(STATE / "slurm.conf"), "PATH": SEARCH}
+    try:
+        started = subprocess.run(["bash", str(CLUSTER), "start", str(STATE)], capture_output=True, text=True,
+                                 timeout=120)
+        assert started.returncode == 0, f"the SLURM cluster did not start:\n{started.stdout}{started.stderr}"
+        yield env
+    finally:
+        subprocess.run(["bash", str(CLUSTER), "stop", str(STATE)], timeout=120)
+
+
+def table_files(out):
+    return {p.relative_to(out): p.read_bytes() for table in TABLES for p in sorted((out / table).rglob("*.parquet"))}
+
+
+def test_the_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["sweep", "plan", str(SMOKE), "--results", "slurm"]) == 0
+    script = tmp_path / "slurm" / "smoke" / "smoke.sbatch"
+    try:
+        job = subprocess.run(["sbatch", "--wait", str(script)], env=slurm, capture_output=True, text=True,
+                             timeout=600)
+    except subprocess.TimeoutExpired:
+        subprocess.run(["scancel", "--name=dronefleet-smoke"], env=slurm)
+        raise
+    logs = sorted((tmp_path / "slurm" / "smoke" / "_logs").glob("*.out"))
+    printed = "".join(f"--- {log.name}\n{log.read_text()}" for log in logs)
+    assert job.returncode == 0, f"{job.stdout}{job.stderr}\n{printed}"
+    assert len(logs) == 3 and printed.count("ran 3, skipped 0") == 2 and "ran 2, skipped 0" in printed
+
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", "local", "--jobs", "2"]) == 0
+    for results in ("slurm", "local"):
+        assert cli.main(["sweep", "status", str(SMOKE), "--results", results]) == 0
+        assert cli.main(["sweep", "collect", str(SMOKE), "--results", results]) == 0
+    on_slurm, local = tmp_path / "slurm" / "smoke", tmp_path / "local" / "smoke"
+    collected = pd.read_parquet(on_slurm / "collected.parquet")
+    assert len(collected) == 8
+    pd.testing.assert_frame_equal(collected, pd.read_parquet(local / "collected.parquet"))
+    assert (on_slurm / "collected.parquet").read_bytes() == (local / "collected.parquet").read_bytes()
+    assert table_files(on_slurm) == table_files(local)
+    assert len(table_files(local)) == len(TABLES) * 8

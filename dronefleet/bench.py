@@ -6,7 +6,7 @@ run after compilation (median, min, max over ``--runs`` seeds), advertisements
 (auctions) per second and the peak resident memory of the process doing the runs. It
 asserts nothing: machines are noisy, read the figures.
 
-``--sweep FILE [--jobs J]`` times a whole sweep instead (``configs/sweeps/fig16.toml``:
+``--sweep FILE [--jobs J]`` times a whole sweep instead (``configs/sweeps/rules.toml``:
 the 360 runs of Figure 16), as ``dronefleet sweep run`` runs it on J local processes,
 tables written (into a temporary directory): wall time and runs per minute.
 """
@@ -34,7 +34,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(prog="python -m dronefleet.bench", description=__doc__)
     parser.add_argument("--runs", type=int, default=5, help="timed runs after compilation (default 5)")
     parser.add_argument("--warm", action="store_true", help="use the existing numba cache instead of compiling")
-    parser.add_argument("--sweep", metavar="FILE", help="time this sweep instead, e.g. configs/sweeps/fig16.toml")
+    parser.add_argument("--sweep", metavar="FILE", help="time this sweep instead, e.g. configs/sweeps/rules.toml")
     parser.add_argument("--jobs", type=int, help="local processes of --sweep (default: all CPUs)")
     args = parser.parse_args(argv)
     compile_s = float("nan")

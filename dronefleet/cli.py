@@ -1,12 +1,13 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
-[--fleet FILE] [--save-fleet FILE]``; ``dronefleet sweep plan|run|status|collect SWEEP``."""
+[--fleet FILE] [--save-fleet FILE]``; ``dronefleet sweep plan|run|status|collect SWEEP``;
+``dronefleet reproduce fig16..fig20|all [--quick]``."""
 
 import argparse
 import sys
 import time
 from pathlib import Path
 
-from . import sweep
+from . import reproduce, sweep
 from .config import SECONDS_PER_WEEK, ConfigError, load_config
 
 
@@ -96,6 +97,7 @@ def build_parser():
     p.add_argument("--save-fleet", metavar="FILE", help="save the fleet at the end of the run (parquet)")
     p.set_defaults(func=run)
     _add_sweep_commands(commands)
+    reproduce.add_parser(commands)
     return parser
 
 
@@ -114,7 +116,7 @@ def _add_sweep_commands(commands):
                                  description="Grids of conditions times seeds; see the README, section Sweeps.")
     actions = sweeps.add_subparsers(dest="action", required=True)
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/fig16.toml")
+    common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/rules.toml")
     common.add_argument("--results", default="results", metavar="DIR",
                         help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
     p = actions.add_parser("plan", parents=[common], help="print the runs and tasks, write a SLURM job-array script")

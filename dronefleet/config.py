@@ -440,7 +440,7 @@ def _unknown_name_message(name: str) -> str:
     return f"unknown key {name!r}{_suggest(name, PARAMETERS)}. Allowed keys: {', '.join(PARAMETERS)}"
 
 
-def _resolve_key(key: str) -> str:
+def resolve_key(key: str) -> str:
     """'section.key' or a bare unique key name -> the parameter name."""
     if "." in key:
         section, _, name = key.partition(".")
@@ -464,7 +464,7 @@ def _parse_override(text: Any) -> tuple[str, Any]:
     key, raw = key.strip(), raw.strip()
     if not key:
         raise ConfigError(f"--set needs key=value, got {text!r}")
-    name = _resolve_key(key)
+    name = resolve_key(key)
     try:
         doc = tomllib.loads(f"v = {raw}")
         value = doc["v"] if list(doc) == ["v"] else raw

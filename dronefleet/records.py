@@ -34,6 +34,7 @@ period int16 (operating period: 1, or the saved fleet's plus one for a warm star
 
 import json
 import os
+import socket
 from pathlib import Path
 
 import numpy as np
@@ -141,17 +142,28 @@ def tables(result):
             "timeseries": timeseries_table(result), "summary": summary_table(result)}
 
 
-def write_table(table, path, config):
-    """Write ``table`` to ``path`` atomically, with the resolved ``config`` in its metadata."""
+def write_atomic(path, write):
+    """``write(tmp)`` a hidden sibling temporary file, then rename it to ``path``; return ``path``.
+
+    A reader never sees a partial file, and an interrupted write leaves only the hidden
+    temporary, whose name ends in ``.tmp`` (no dataset reader or ``*.parquet`` glob takes
+    it). It names the host and process: writers on several hosts of a shared filesystem
+    never collide.
+    """
     path = Path(path)
-    table = table.replace_schema_metadata({CONFIG_KEY: config.to_json(), b"dronefleet.version": __version__})
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp = path.with_name(f".{path.name}.{socket.gethostname()}-{os.getpid()}.tmp")
     try:
-        pq.write_table(table, tmp)
+        write(tmp)
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
     return path
+
+
+def write_table(table, path, config):
+    """Write ``table`` to ``path`` atomically, with the resolved ``config`` in its metadata."""
+    table = table.replace_schema_metadata({CONFIG_KEY: config.to_json(), b"dronefleet.version": __version__})
+    return write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
 def write_run(result, out_dir):

@@ -3,7 +3,7 @@
 A sweep file is TOML (``configs/sweeps/``)::
 
     [sweep]
-    name = "fig16"              # the dataset is <results>/fig16/ (default: the file's stem)
+    name = "rules"              # the dataset is <results>/rules/ (default: the file's stem)
     base = "../paper.toml"      # config file, relative to this file (default: the paper's defaults)
     seeds = { start = 0, count = 20 }   # or a list: seeds = [0, 1, 2]
     runs_per_task = 10          # runs per job-array task (default 10)
@@ -58,7 +58,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from urllib.parse import quote
 
-from .config import PARAMETERS, Config, ConfigError, _resolve_key, default_config, load_config, replace
+from .config import PARAMETERS, Config, ConfigError, default_config, load_config, replace, resolve_key
 
 #: Environment variables that give a job-array task's index, with the index of the
 #: scheduler's first task: SGE and LSF arrays start at 1, so their task k is index k + 1.
@@ -150,7 +150,7 @@ def _parameters(table, where: str) -> dict:
         entries = [(f"{key}.{k}", v) for k, v in value.items()] if isinstance(value, dict) else [(key, value)]
         for text, v in entries:
             try:
-                name = _resolve_key(text)
+                name = resolve_key(text)
             except ConfigError as error:
                 raise SweepError(f"{where}: {error}", error.keys) from None
             if name == "seed":
@@ -279,16 +279,6 @@ def load_sweep(path, changes=None, seeds=None) -> Sweep:
 # --------------------------------------------------------------------------- one run
 
 
-def _write_atomic(path: Path, write) -> None:
-    """``write(tmp)`` a sibling temporary file, then rename it to ``path``: never a partial file."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
 def execute(run: Run, out: Path) -> str | None:
     """Simulate ``run`` and write its tables into the dataset ``out``.
 
@@ -296,7 +286,7 @@ def execute(run: Run, out: Path) -> str | None:
     and its error returned as one line; a run that succeeds removes any such record and
     returns None. Runs in worker processes, so it imports the engine here.
     """
-    from .records import tables, write_table
+    from .records import tables, write_atomic, write_table
     from .simulation import simulate
 
     failure = run.failure_path(out)
@@ -311,7 +301,7 @@ def execute(run: Run, out: Path) -> str | None:
         record = {"run": run.partition, "error": f"{type(error).__name__}: {error}",
                   "traceback": traceback.format_exc(), "config": run.config.to_dict()}
         failure.parent.mkdir(parents=True, exist_ok=True)
-        _write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
+        write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
         return record["error"]
     failure.unlink(missing_ok=True)
     return None
@@ -471,6 +461,7 @@ def collect(sweep: Sweep, out: Path):
     import pyarrow.parquet as pq
 
     from . import __version__
+    from .records import write_atomic
 
     rows, not_done = [], []
     for run in sweep.runs:
@@ -484,7 +475,7 @@ def collect(sweep: Sweep, out: Path):
         raise SweepError(f"no run of sweep {sweep.name} is done in {out}")
     table = pa.concat_tables(rows).replace_schema_metadata(
         {b"dronefleet.sweep": sweep.text, b"dronefleet.version": __version__})
-    _write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
+    write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
     return table, not_done
 
 

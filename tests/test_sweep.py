@@ -47,9 +47,9 @@ def smoke(tmp_path_factory):
 # ---------------------------------------------------------------------------- sweep files
 
 
-def test_fig16_is_the_papers_grid_in_a_fixed_order():
-    s = sw.load_sweep(CONFIGS / "sweeps" / "fig16.toml")
-    assert (s.name, len(s.runs), s.runs_per_task, s.n_tasks) == ("fig16", 360, 10, 36)
+def test_the_rules_sweep_is_figure_16s_grid_in_a_fixed_order():
+    s = sw.load_sweep(CONFIGS / "sweeps" / "rules.toml")
+    assert (s.name, len(s.runs), s.runs_per_task, s.n_tasks) == ("rules", 360, 10, 36)
     assert s.describe() == "3 rule x 6 tau_minutes x 20 seeds = 360 runs"
     assert s.grid == {"rule": ("least_confident", "most_confident", "random"),
                       "tau_minutes": (15.0, 20.0, 25.0, 30.0, 35.0, 40.0)}

@@ -146,8 +146,8 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except ConfigError as error:
-        print(f"dronefleet: config error: {error}", file=sys.stderr)
+    except ConfigError as error:  # bad input (config, sweep, fleet file): refused before any work
+        print(f"dronefleet: error: {error}", file=sys.stderr)
         return 2
 
 

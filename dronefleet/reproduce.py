@@ -57,10 +57,11 @@ def sweeps_dir():
 class Study:
     """The study's sweeps under one results root: loaded (validated) once, run on demand."""
 
-    def __init__(self, results, quick=False, jobs=None):
+    def __init__(self, results, quick=False, jobs=None, log=print):
         self.root = Path(results) / "quick" if quick else Path(results)
         self.quick = quick
         self.jobs = jobs or available_cpus()
+        self.log = log
         self._sweeps = {}
 
     def sweep(self, name):
@@ -90,8 +91,8 @@ class Study:
         out = self.out(name)
         start = time.perf_counter()
         ran, failures = run_sweep(sweep, out, sweep.runs, self.jobs, progress=Progress())
-        print(f"  sweep {sweep.name}: {sweep.describe()}; ran {ran} in {time.perf_counter() - start:.1f} s, "
-              f"{len(sweep.runs) - ran} reused", flush=True)
+        self.log(f"  sweep {sweep.name}: {sweep.describe()}; ran {ran} in {time.perf_counter() - start:.1f} s, "
+                 f"{len(sweep.runs) - ran} reused", flush=True)
         if failures:
             lines = "\n".join(f"    {run.partition}: {error}" for run, error in failures.items())
             raise SweepError(f"sweep {sweep.name}: {len(failures)} runs failed (dronefleet sweep status "
@@ -246,7 +247,7 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
     With ``redraw``, only draw, from the tidy parquet tables already written. Returns the
     paths of the figure files, by figure.
     """
-    study = Study(results, quick, jobs)
+    study = Study(results, quick, jobs, log)
     drawn = {}
     for figure in figures:
         start = time.perf_counter()

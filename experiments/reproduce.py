@@ -1,0 +1,15 @@
+#!/usr/bin/env python3
+"""Reproduce a figure of the study: ``python experiments/reproduce.py fig16|...|fig20|all [--quick]``.
+
+``experiments/figNN.py`` are links to this script that reproduce their figure
+(``python experiments/fig16.py --quick``). Same as ``dronefleet reproduce``; see
+``results/README.md`` for what each figure runs and shows.
+"""
+
+import sys
+from pathlib import Path
+
+from dronefleet.cli import main
+
+figure = Path(sys.argv[0]).stem
+sys.exit(main(["reproduce", *([] if figure == "reproduce" else [figure]), *sys.argv[1:]]))

@@ -1,0 +1,131 @@
+"""``dronefleet reproduce``: every figure in quick mode, its tidy tables, and redrawing without simulating."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from dronefleet import analysis, cli, records, reproduce, simulation, sweep
+
+pytest.importorskip("matplotlib")
+
+ROOT = Path(__file__).resolve().parent.parent
+PNGS = {"fig16": ["fig16a", "fig16b", "fig16c"], "fig17": ["fig17"], "fig18": ["fig18"],
+        "fig19": ["fig19a", "fig19b", "fig19c"], "fig20": ["fig20"]}
+TABLES = {"fig16": ["outcomes", "backlog"], "fig17": ["accuracy"], "fig18": ["winner_soh"],
+          "fig19": ["thresholds", "outcomes", "backlog"], "fig20": ["pending"]}
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    """Every figure reproduced in quick mode once; the results root and what it printed."""
+    results = tmp_path_factory.mktemp("reproduce")
+    lines = []
+    drawn = reproduce.reproduce(reproduce.FIGURES, results, quick=True, jobs=2,
+                                log=lambda *a, **k: lines.append(" ".join(map(str, a))))
+    return results / "quick", drawn, lines
+
+
+@pytest.mark.parametrize("figure", reproduce.FIGURES)
+def test_quick_mode_writes_non_empty_tables_and_figures(quick, figure):
+    root, drawn, _ = quick
+    for name in TABLES[figure]:
+        table = pd.read_parquet(root / figure / f"{name}.parquet")
+        assert len(table) > 0, name
+    for name in PNGS[figure]:
+        path = root / figure / f"{name}.png"
+        assert path in drawn[figure]
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and path.stat().st_size > 10_000
+
+
+def test_the_tidy_tables_hold_every_run_and_week(quick):
+    root, _, _ = quick
+    outcomes = pd.read_parquet(root / "fig16" / "outcomes.parquet")
+    assert len(outcomes) == 3 * 6 * len(reproduce.QUICK_SEEDS)
+    assert sorted(outcomes.tau_minutes.unique()) == [15.0, 20.0, 25.0, 30.0, 35.0, 40.0]
+    backlog = pd.read_parquet(root / "fig16" / "backlog.parquet")
+    assert len(backlog) == len(outcomes) * 2  # two weeks
+    accuracy = pd.read_parquet(root / "fig17" / "accuracy.parquet")
+    assert sorted(accuracy.rule.unique()) == ["least_confident", "most_confident", "random"]
+    assert accuracy.week.tolist().count(1) == 3 and (accuracy.uavs == 25 * len(reproduce.QUICK_SEEDS)).all()
+    grid = pd.read_parquet(root / "fig18" / "winner_soh.parquet")
+    assert len(grid) == 10 * 81 * 91
+    assert (grid.runs == len(reproduce.QUICK_SEEDS)).all()
+    thresholds = pd.read_parquet(root / "fig19" / "thresholds.parquet")
+    assert thresholds.theta.tolist() == [50.0, 60.0, 70.0, 80.0, 90.0, 100.0] and thresholds.best.sum() == 1
+    pending = pd.read_parquet(root / "fig20" / "pending.parquet")
+    assert sorted(pending.rule.unique()) == ["least_confident", "reservation"]
+    assert len(pending) == 2 * len(reproduce.QUICK_SEEDS) * 2
+
+
+def test_figure_20_starts_from_the_rules_sweeps_learned_fleets(quick):
+    root, _, _ = quick
+    study = reproduce.Study(root.parent, quick=True)
+    rules, reservations = study.sweep("rules"), study.sweep("reservations")
+    for run in reservations.runs:
+        path = run.path(study.out("reservations"), "summary")
+        config = records.read_config(path)
+        learned = next(r for r in rules.runs if r.config.rule == "least_confident"
+                       and r.config.tau_minutes == 15.0 and r.config.seed == run.config.seed)
+        assert Path(config.fleet_file.replace("{seed}", str(config.seed))) == \
+            learned.path(study.out("rules"), "fleet").absolute()
+        assert pd.read_parquet(path).period.tolist() == [2]
+
+
+def test_figure_18_is_the_grid_over_the_final_least_confident_policies(quick):
+    root, _, _ = quick
+    study = reproduce.Study(root.parent, quick=True)
+    fleet = study.table("rules", "fleet", rule="least_confident", tau_minutes=15.0)
+    final = fleet[fleet.week == 2]
+    expected = analysis.winner_soh_grid(final, study.sweep("rules").runs[0].config)
+    pd.testing.assert_frame_equal(pd.read_parquet(root / "fig18" / "winner_soh.parquet"), expected)
+
+
+def test_a_second_run_reuses_every_run(quick, capsys):
+    root, drawn, _ = quick
+    lines = []
+    reproduce.reproduce(["fig19"], root.parent, quick=True, jobs=1,
+                        log=lambda *a, **k: lines.append(" ".join(map(str, a))))
+    assert any("sweep thresholds" in line and "ran 0 " in line and "72 reused" in line for line in lines)
+
+
+def test_redrawing_reads_only_the_parquet_tables(quick, monkeypatch):
+    root, drawn, _ = quick
+    before = {path: path.read_bytes() for paths in drawn.values() for path in paths}
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("redrawing must not simulate or read a sweep")
+
+    monkeypatch.setattr(simulation, "simulate", forbidden)
+    monkeypatch.setattr(reproduce, "run_sweep", forbidden)
+    monkeypatch.setattr(reproduce, "dataset", forbidden)
+    for paths in drawn.values():
+        for path in paths:
+            path.unlink()
+    assert cli.main(["reproduce", "all", "--quick", "--redraw", "--results", str(root.parent)]) == 0
+    assert {path: path.read_bytes() for path in before} == before  # the same bytes again
+
+
+def test_redraw_without_tables_says_what_to_run(tmp_path, capsys):
+    assert cli.main(["reproduce", "fig17", "--redraw", "--results", str(tmp_path)]) == 2
+    assert "run dronefleet reproduce fig17 without --redraw first" in capsys.readouterr().err
+
+
+def test_the_experiments_scripts_reach_the_same_command():
+    for figure in reproduce.FIGURES:
+        script = ROOT / "experiments" / f"{figure}.py"
+        out = subprocess.run([sys.executable, str(script), "--help"], capture_output=True, text=True, check=True)
+        assert "dronefleet reproduce" in out.stdout
+
+
+def test_quick_sweeps_are_the_study_sweeps_with_fewer_seeds_and_weeks(tmp_path):
+    study = reproduce.Study(tmp_path, quick=True)
+    full = reproduce.Study(tmp_path)
+    for name in ("rules", "thresholds", "reservations"):
+        q, f = study.sweep(name), full.sweep(name)
+        assert q.grid == f.grid and q.seeds == reproduce.QUICK_SEEDS and len(f.seeds) == 20
+        assert {r.config.horizon_weeks for r in q.runs} == {2.0} and {r.config.horizon_weeks for r in f.runs} == {8.0}
+    assert len(full.sweep("rules").runs) == 360 and len(full.sweep("thresholds").runs) == 720
+    assert isinstance(study.sweep("rules"), sweep.Sweep)

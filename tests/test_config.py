@@ -202,6 +202,23 @@ def test_unknown_rule_lists_registered_rules():
         assert load_config(overrides=[f"rule={name}"]).rule == name
 
 
+@pytest.mark.parametrize("base", ["threshold", "reservation"])
+def test_reservation_base_rule_must_bid_on_its_policy(base):
+    with pytest.raises(ConfigError) as e:
+        load_config(overrides=["rule=reservation", f"base_rule={base}"])
+    msg = str(e.value)
+    assert f"auction.base_rule = '{base}' is not a rule that bids on its policy" in msg
+    assert "Allowed: 'least_confident', 'most_confident', 'random'" in msg
+    assert load_config(overrides=["rule=reservation", "base_rule=random"]).base_rule == "random"
+
+
+def test_fleet_file_is_any_path_checked_when_used():
+    assert load_config(overrides=["fleet_file=runs/seed={seed}/fleet.parquet"]).fleet_file == \
+        "runs/seed={seed}/fleet.parquet"
+    with pytest.raises(ConfigError, match="run.fleet_file must be a string"):
+        load_config(overrides=["fleet_file=3"])
+
+
 # --------------------------------------------------------------------------
 # Types and ranges
 # --------------------------------------------------------------------------

@@ -12,8 +12,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pyarrow.compute as pc
-import pyarrow.parquet as pq
 
 from .config import ConfigError
 
@@ -55,7 +53,11 @@ def load_fleet(path, config):
         If the file is missing or not a fleet file, or its fleet size or feature scaling
         differs from ``config``'s (the message names the key and both values).
     """
-    from .records import read_config  # records imports the engine; keep this module light
+    # Imported here: simulation imports this module, and a run from a new fleet needs neither.
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    from .records import read_config
 
     path = Path(str(path).replace("{seed}", str(config.seed)))
     if not path.is_file():
@@ -89,6 +91,8 @@ def load_fleet(path, config):
 
 def save_fleet(result, path):
     """Write the fleet at the end of ``result`` to ``path`` (atomically), as a fleet file."""
+    import pyarrow.compute as pc
+
     from .records import fleet_table, write_table
 
     table = fleet_table(result)

@@ -25,7 +25,6 @@ Figure      functions
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from .metrics import by_arrival_week
 from .policy import standardise
@@ -171,6 +170,8 @@ def weekly_accuracy(fleet, by=("rule",), confidence=0.95):
         One row per group and week: ``*by, week, uavs`` (sample size n),
         ``mean_accuracy``, ``ci_low``, ``ci_high`` (0..1; nan if n < 2), ``confidence``.
     """
+    from scipy import stats  # here: scipy.stats alone takes 0.4 s to import, and only this needs it
+
     keys = [*by, "week"]
     frame = _select(fleet, keys, ("decision_accuracy",)).dropna(subset=["decision_accuracy"])
     out = _groups(frame, keys)["decision_accuracy"].agg(uavs="count", mean_accuracy="mean", sd="std")

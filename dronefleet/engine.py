@@ -255,11 +255,9 @@ def _earliest_bid(book, fleet, counters, params, t):
                 if slack + w_soc * (soc - params.soc_mean) >= -margin:
                     return t
                 continue
-            if params.reserves:
-                if slack + w_soc * (100.0 - params.soc_mean) >= -margin:
-                    return t
-                continue
             need = params.soc_mean + (-slack - margin) / w_soc
+            if params.reserves and need <= 100.0:  # it can reserve now, whatever its SoC
+                return t
         if soc >= need:
             return t
         gap = 100.0 - need + SOC_MARGIN
@@ -282,12 +280,12 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     tick = counters[NEXT_TICK]
     end = min(end_max, tick + SCAN_TICKS)
     t_end = end * interval  # after every scanned tick
+    # Charging drives SoC up to 100 (t = inf), where a UAV that may reserve is keenest.
+    t_keenest = np.inf if params.reserves else t_end
     for i in range(fleet.mode.shape[0]):
         if fleet.mode[i] == IDLE:
-            t_best = t_end if fleet.coef[i, 2] > 0.0 else t_tick
+            t_best = t_keenest if fleet.coef[i, 2] > 0.0 else t_tick
             soc = soc_after_charging(fleet.soc_ref[i], t_best - fleet.t_ref[i], params.charge_rate)
-            if params.reserves and fleet.coef[i, 2] > 0.0:
-                soc = 100.0
             fleet.x_soc_best[i] = (soc + SOC_MARGIN - params.soc_mean) / params.soc_std
     n = counters[QUEUE_LEN]
     pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
@@ -451,11 +449,47 @@ def _reserved_takeoff(book, fleet, params, i, order, t, wait):
 
 
 @njit(cache=True)
+def _reservation_bids(book, fleet, counters, params, table, order, t, immediate):
+    """Second phase of an auction with reservations: the idle UAVs that did not bid now.
+
+    If someone bid now (``immediate``), no reservation can win: they only pass
+    (notCapableTask). Otherwise each bids its forecast wait, if it has one (capableTask,
+    bid). Returns (refused, the lowest bidder, its wait); ties go to the highest id, and
+    (-1, inf) if nobody reserves.
+    """
+    reserver = -1
+    best_wait = np.inf
+    x0 = book.x_distance[order]
+    x1 = book.x_mass[order]
+    for i in range(fleet.mode.shape[0]):
+        if fleet.mode[i] != IDLE or fleet.bidding[i]:
+            continue
+        wait = np.inf
+        if not immediate:
+            soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
+            f_order = fleet.coef[i, 0] * x0 + fleet.coef[i, 1] * x1 + fleet.intercept[i]
+            wait = reservation_wait(f_order, fleet.coef[i, 2], soc, params.soc_mean, params.soc_std,
+                                    params.charge_rate)
+        if wait == np.inf:
+            if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
+                return True, -1, np.inf
+            continue
+        if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
+            return True, -1, np.inf
+        fleet.bidding[i] = True
+        if wait <= best_wait:  # ascending ids: ties go to the highest id
+            best_wait = wait
+            reserver = i
+    return False, reserver, best_wait
+
+
+@njit(cache=True)
 def _auction(book, fleet, attempts, counters, params, table, rng, t):
     """Advertise one order at tick time ``t`` and resolve its auction. False if refused.
 
-    Immediate bids are resolved by the rule; with reservations, only if there are none,
-    the lowest reservation bid wins (ties to the highest id) and the winner waits at the FC.
+    Immediate bids are resolved by the rule. With reservations, the UAVs that did not bid
+    now then bid for later (:func:`_reservation_bids`); only if nobody bid now, the lowest
+    reservation bid wins and the winner waits at the FC.
     """
     n = counters[QUEUE_LEN]
     pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
@@ -468,8 +502,6 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
     winner = -1
     winner_soc = 0.0
     best = -np.inf
-    reserver = -1
-    best_wait = np.inf
     n_uavs = fleet.mode.shape[0]
     bidder = fleet.bidding
     for i in range(n_uavs):
@@ -477,22 +509,12 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
         if fleet.mode[i] != IDLE:
             continue
         soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
-        x2 = (soc - params.soc_mean) / params.soc_std
-        f = decision(fleet.coef, fleet.intercept, i, x0, x1, x2)
+        f = decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
         w = fleet.coef[i]
         bids, score = bid(params.rule, f, np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), soc, params.theta, rng)
-        if not bids and params.reserves:
-            wait = reservation_wait(f - w[2] * x2, w[2], soc, params.soc_mean, params.soc_std, params.charge_rate)
-            if wait < np.inf:
-                if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
-                    return False
-                bidder[i] = True
-                if wait <= best_wait:  # ascending ids: ties go to the highest id
-                    best_wait = wait
-                    reserver = i
-                continue
         if not bids:
-            if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
+            # With reservations the UAV's step waits for the second phase.
+            if not params.reserves and not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
                 return False
             continue
         if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
@@ -502,9 +524,14 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
             best = score
             winner = i
             winner_soc = soc
-    reserved = winner < 0
-    if reserved:
-        winner = reserver
+    reserved = False
+    if params.reserves:
+        refused, reserver, best_wait = _reservation_bids(book, fleet, counters, params, table, order, t, winner >= 0)
+        if refused:
+            return False
+        reserved = winner < 0 and reserver >= 0
+        if reserved:
+            winner = reserver
     if winner < 0:
         counters[LAST_ADVERTISED] = order
         return True

@@ -487,9 +487,9 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
 def _auction(book, fleet, attempts, counters, params, table, rng, t):
     """Advertise one order at tick time ``t`` and resolve its auction. False if refused.
 
-    Immediate bids are resolved by the rule. With reservations, the UAVs that did not bid
-    now then bid for later (:func:`_reservation_bids`); only if nobody bid now, the lowest
-    reservation bid wins and the winner waits at the FC.
+    Immediate bids are resolved by the rule. With reservations and nobody bidding now, the
+    idle UAVs bid for later (:func:`_reservation_bids`): the lowest wait wins, and the
+    winner waits at the FC.
     """
     n = counters[QUEUE_LEN]
     pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")

@@ -434,7 +434,8 @@ def _reserved_takeoff(book, fleet, params, i, order, t, wait):
 
     At t + wait its SoC reaches the level at which its policy says "bid", up to rounding;
     the instant is moved on by a few units in the last place until the decision computed
-    as at takeoff is >= 0, so the reserved flight never starts on a "no".
+    as at takeoff is >= 0, so the reserved flight never starts on a "no". This ends
+    because the policy says "bid" at SoC 100 (checked in :func:`_reservation_bids`).
     """
     x0 = book.x_distance[order]
     x1 = book.x_mass[order]
@@ -461,6 +462,7 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
     best_wait = np.inf
     x0 = book.x_distance[order]
     x1 = book.x_mass[order]
+    x_full = (100.0 - params.soc_mean) / params.soc_std
     for i in range(fleet.mode.shape[0]):
         if fleet.mode[i] != IDLE or fleet.bidding[i]:
             continue
@@ -470,6 +472,10 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
             f_order = fleet.coef[i, 0] * x0 + fleet.coef[i, 1] * x1 + fleet.intercept[i]
             wait = reservation_wait(f_order, fleet.coef[i, 2], soc, params.soc_mean, params.soc_std,
                                     params.charge_rate)
+            # SoC never passes 100: if rounding puts f at 100 below 0 while s* < 100, the UAV
+            # would wait for ever (and _reserved_takeoff never return).
+            if wait < np.inf and decision(fleet.coef, fleet.intercept, i, x0, x1, x_full) < 0.0:
+                wait = np.inf
         if wait == np.inf:
             if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
                 return True, -1, np.inf

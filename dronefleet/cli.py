@@ -94,10 +94,11 @@ def build_parser():
     p.add_argument("--fleet", metavar="FILE",
                    help="start from a saved fleet (parquet, '{seed}' is replaced by the seed); "
                         "same as --set run.fleet_file=FILE")
-    p.add_argument("--save-fleet", metavar="FILE", help="save the fleet at the end of the run (parquet)")
+    p.add_argument("--save-fleet", metavar="FILE",
+                   help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.set_defaults(func=run)
     _add_sweep_commands(commands)
-    reproduce.add_parser(commands)
+    _add_reproduce_command(commands)
     return parser
 
 
@@ -140,6 +141,20 @@ def _add_sweep_commands(commands):
     p = actions.add_parser("collect", parents=[common],
                            help="one summary table, a row per run, as DIR/<name>/collected.parquet")
     p.set_defaults(func=sweep.collect_command)
+
+
+def _add_reproduce_command(commands):
+    """``dronefleet reproduce FIGURE``; the work is in :mod:`dronefleet.reproduce`."""
+    p = commands.add_parser("reproduce", help="reproduce a figure of the study (runs what is missing)",
+                            description="See results/README.md for what each figure runs and shows.")
+    p.add_argument("figure", choices=(*reproduce.FIGURES, "all"))
+    p.add_argument("--quick", action="store_true",
+                   help=f"seeds {reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]}, "
+                        f"{reproduce.QUICK_CHANGES['horizon_weeks']:g} weeks, under <results>/quick/ (seconds)")
+    p.add_argument("--jobs", type=_at_least(1), metavar="J", help="local processes for the sweeps (default: all CPUs)")
+    p.add_argument("--results", default="results", metavar="DIR", help="results root (default: results)")
+    p.add_argument("--redraw", action="store_true", help="only redraw the PNGs from the figure's parquet tables")
+    p.set_defaults(func=reproduce.command)
 
 
 def main(argv=None):

@@ -39,9 +39,9 @@ class SavedFleet:
     period: int          # operating period that left this fleet (1 = learned from scratch)
 
 
-def fleet_path(config):
-    """``config.fleet_file`` with ``{seed}`` replaced by the run's seed."""
-    return Path(config.fleet_file.replace("{seed}", str(config.seed)))
+def seeded_path(path, seed):
+    """``path`` with ``{seed}`` replaced by ``seed``: one pattern names the fleet of every seed."""
+    return Path(str(path).replace("{seed}", str(seed)))
 
 
 def load_fleet(path, config):
@@ -59,7 +59,7 @@ def load_fleet(path, config):
 
     from .records import read_config
 
-    path = Path(str(path).replace("{seed}", str(config.seed)))
+    path = seeded_path(path, config.seed)
     if not path.is_file():
         raise FleetFileError(f"run.fleet_file: no such file {str(path)!r}", ["fleet_file"])
     try:
@@ -90,12 +90,17 @@ def load_fleet(path, config):
 
 
 def save_fleet(result, path):
-    """Write the fleet at the end of ``result`` to ``path`` (atomically), as a fleet file."""
+    """Write the fleet at the end of ``result`` to ``path`` (``{seed}`` replaced), atomically, as a fleet file.
+
+    A UAV in flight at the end is saved with its SoC at that instant, as if it were at
+    the FC (a warm start puts it there); the learning step of its landing is not taken.
+    """
     import pyarrow.compute as pc
 
     from .records import fleet_table, write_table
 
+    path = seeded_path(path, result.config.seed)
     table = fleet_table(result)
     last = table.filter(pc.equal(table["t_s"], pc.max(table["t_s"])))
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
     return write_table(last, path, result.config)

@@ -10,6 +10,8 @@ by the horizon):
 
 ``orders``: order_id int32, arrival_s, arrival_week int16 (1 = first week), distance_m, mass_kg,
 attempts int16, winners list<int16> (UAVs of its attempts in order), delivered_s, delivery_time_s.
+(An order reserved but not yet flown at the horizon has no attempt: the UAV waits for it; the
+summary's reservations_won counts it.)
 
 ``attempts``: attempt_id int32, uav int16, order_id int32, takeoff_s, takeoff_soc,
 outcome string (in_flight | delivered | aborted | lost: the UAV did not come back),

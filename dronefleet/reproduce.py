@@ -78,11 +78,18 @@ class Study:
         return self.root / self.sweep(name).name
 
     def fleet_template(self):
-        """The fleet files of the rules sweep's least_confident runs at tau 15, with ``{seed}``."""
+        """The fleet files of the rules sweep's least_confident runs at tau 15, with ``{seed}``.
+
+        Relative to the working directory, like the results root (and, for the default
+        root, the very path of ``reservations.toml``, so both name the same runs).
+        """
         rules = self.sweep("rules")
-        run = next(r for r in rules.runs if r.config.rule == "least_confident"
-                   and r.config.tau_minutes == LEARNING_TAU)
-        path = run.path(self.out("rules"), "fleet").absolute()
+        run = next((r for r in rules.runs if r.config.rule == "least_confident"
+                    and r.config.tau_minutes == LEARNING_TAU), None)
+        if run is None:
+            raise SweepError(f"{rules.path} has no least_confident runs at tau = {LEARNING_TAU:g} min, "
+                             "whose learned fleets Figure 20 starts from")
+        path = run.path(self.out("rules"), "fleet")
         return path.parent.parent / "seed={seed}" / path.name
 
     def ensure(self, name):
@@ -269,19 +276,6 @@ def command(args):
     reproduce(figures, args.results, args.quick, args.jobs, args.redraw)
     print(f"reproduce {args.figure}: done in {time.perf_counter() - start:.1f} s")
     return 0
-
-
-def add_parser(commands):
-    """The ``reproduce`` subcommand of the command line."""
-    p = commands.add_parser("reproduce", help="reproduce a figure of the study (runs what is missing)")
-    p.add_argument("figure", choices=(*FIGURES, "all"))
-    p.add_argument("--quick", action="store_true",
-                   help=f"seeds {QUICK_SEEDS[0]}-{QUICK_SEEDS[-1]}, {QUICK_CHANGES['horizon_weeks']:g} weeks, "
-                        "under <results>/quick/ (a check in minutes)")
-    p.add_argument("--jobs", type=int, help="local processes for the sweeps (default: all CPUs)")
-    p.add_argument("--results", default="results", help="results root (default: results)")
-    p.add_argument("--redraw", action="store_true", help="only redraw the PNGs from the figure's parquet tables")
-    p.set_defaults(func=command)
 
 
 if __name__ == "__main__":

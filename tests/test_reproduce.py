@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 
 from dronefleet import analysis, cli, records, reproduce, simulation, sweep
+from dronefleet.fleet import seeded_path
 
 pytest.importorskip("matplotlib")
 
@@ -69,8 +70,7 @@ def test_figure_20_starts_from_the_rules_sweeps_learned_fleets(quick):
         config = records.read_config(path)
         learned = next(r for r in rules.runs if r.config.rule == "least_confident"
                        and r.config.tau_minutes == 15.0 and r.config.seed == run.config.seed)
-        assert Path(config.fleet_file.replace("{seed}", str(config.seed))) == \
-            learned.path(study.out("rules"), "fleet").absolute()
+        assert seeded_path(config.fleet_file, config.seed) == learned.path(study.out("rules"), "fleet")
         assert pd.read_parquet(path).period.tolist() == [2]
 
 

@@ -11,7 +11,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import K, MU, SIGMA, WEEK, run_state, scenario, scenario_config, x_std
-from dronefleet import config as cfg, engine, fleet as fleetfile, records, simulation
+from dronefleet import cli, config as cfg, engine, fleet as fleetfile, records, simulation
+from dronefleet.metrics import run_metrics
 from dronefleet.orders import generate_orders
 from dronefleet.policy import optimal_init, sgd_step
 
@@ -57,6 +58,17 @@ def test_reserved_takeoff_is_the_analytic_crossing_and_the_policy_says_bid(soc0,
     assert a["takeoff_soc"][0] == pytest.approx(need, abs=1e-9)
     assert decision(policy, 3500.0, 2.0, a["takeoff_soc"][0]) >= 0.0
     assert r.reservations == 1
+    m = run_metrics(r)
+    assert (m["reservations_won"], m["forecast_met_pct"]) == (1, 100.0)  # 2 kg over 3.5 km: delivered
+    assert m["median_reservation_wait_s"] == pytest.approx(expected, abs=1e-9)
+    # The time series: reserved (at the FC, not idle, not in flight) until takeoff.
+    s = r.series
+    waiting = s["t_s"] < a["takeoff_s"][0]
+    flying = (s["t_s"] >= a["takeoff_s"][0]) & (s["t_s"] < a["return_s"][0])
+    assert waiting.sum() >= 1  # the sample at t = 0
+    assert s["reserved"].tolist() == waiting.astype(int).tolist()
+    assert s["in_flight"].tolist() == flying.astype(int).tolist()
+    assert (s["idle"] == 1 - waiting - flying).all()
 
 
 def test_no_reservation_when_the_needed_soc_is_out_of_reach_or_f_falls_with_soc():
@@ -112,6 +124,43 @@ def test_a_reserved_uav_takes_no_part_in_other_auctions_and_its_order_is_not_adv
     assert a["allocated_s"][1] == math.ceil(a["return_s"][0] / 2.0) * 2.0
 
 
+def test_a_reserved_uav_is_out_of_auctions_that_go_on_for_the_others():
+    # As above, with UAV 1 idle and never bidding: order 1 is advertised all along, and UAV 0,
+    # whose policy says "bid now" to it, takes no part until it is back from order 0.
+    c = reservation_config(n_uavs=2)
+    policy = ((-0.5, 0.0, 1.0), 0.0)
+    never = ((0.0, 0.0, 1.0), -1e3)
+    st = scenario(c, [0.0, 10.0], [6000.0, 1000.0], [1.0, 1.0], policies=[policy, never], soc=40.0)
+    simulation.advance(st, 5000.0)
+    assert st.fleet.mode.tolist() == [engine.RESERVED, engine.IDLE]
+    assert st.counters[engine.N_AUCTIONS] == 1 + 2496  # order 0 at t = 0, then order 1 at 10, 12, .., 5000
+    r = run_state(st, c)
+    a = r.attempts
+    assert a["uav"].tolist()[:2] == [0, 0] and a["order"].tolist()[:2] == [0, 1]
+    assert a["allocated_s"][1] == math.ceil(a["return_s"][0] / 2.0) * 2.0
+
+
+@pytest.mark.parametrize("base,winner", [("least_confident", 0), ("most_confident", 1)])
+def test_immediate_bids_are_resolved_by_the_base_rule(base, winner):
+    # Both bid now; UAV 0 is the less confident.
+    c = reservation_config(n_uavs=2, base_rule=base)
+    st = scenario(c, [0.0], [3500.0], [2.0], policies=[((0.0, 0.0, 1.0), 1.0), ((0.0, 0.0, 1.0), 3.0)], soc=50.0)
+    r = run_state(st, c, t_stop=0.0)
+    assert r.attempts["uav"].tolist() == [winner] and r.reservations == 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_reservation_with_the_random_base_rule_draws_like_the_random_rule(seed):
+    # With immediate bidders only, reservation(random) is the random rule: same draws, same winners.
+    policies = [((0.0, 0.0, 1.0), 1.0 + i) for i in range(4)]
+    winners = []
+    for rule in ("random", "reservation"):
+        c = scenario_config(n_uavs=4, horizon_s=600.0, rule=rule, base_rule="random", seed=seed)
+        st = scenario(c, [0.0, 0.0, 0.0], [1000.0] * 3, [1.0] * 3, policies=policies)
+        winners.append(run_state(st, c).attempts["uav"].tolist())
+    assert winners[0] == winners[1] and len(winners[0]) == 3
+
+
 def test_an_aborted_reserved_order_is_advertised_again_once_its_parcel_is_back():
     # SoH 0.5 and the policy of a healthy UAV: the reserved flight of 6 km with 5 kg aborts, and
     # what the UAV learns from it keeps it from bidding again.
@@ -126,6 +175,8 @@ def test_an_aborted_reserved_order_is_advertised_again_once_its_parcel_is_back()
     assert st.counters[engine.QUEUE_LEN] == 1 and st.book.queue[0] == 0
     t = records.tables(r)["attempts"].to_pydict()
     assert t["reserved"] == [True] and t["forecast_met"] == [False]
+    m = run_metrics(r)
+    assert (m["reservations_won"], m["forecast_met_pct"]) == (1, 0.0)
     assert t["wait_s"][0] == pytest.approx(crossing_time(30.0, 60.0), abs=1e-9)
 
 
@@ -244,6 +295,36 @@ def test_fleet_file_seed_placeholder(saved_fleet, tmp_path):
         simulation.initial_state(cfg.replace(c, seed=4))
 
 
+def test_cli_saves_and_starts_from_a_fleet_with_the_seed_in_its_name(tmp_path, capsys):
+    common = ["--set", "horizon_weeks=0.1", "--set", "n_uavs=5", "--seed", "3"]
+    pattern = str(tmp_path / "fleet-{seed}.parquet")
+    assert cli.main(["run", *common, "--out", str(tmp_path / "a"), "--save-fleet", pattern]) == 0
+    assert (tmp_path / "fleet-3.parquet").is_file()
+    assert cli.main(["run", *common, "--out", str(tmp_path / "b"), "--fleet", pattern,
+                     "--set", "rule=reservation"]) == 0
+    summary = pq.read_table(tmp_path / "b" / "summary.parquet").to_pylist()[0]
+    assert (summary["period"], summary["rule"]) == (2, "reservation")
+    assert records.read_config(tmp_path / "b" / "summary.parquet").fleet_file == pattern
+    capsys.readouterr()
+    assert cli.main(["run", "--set", "n_uavs=6", "--seed", "3", "--fleet", pattern]) == 2
+    assert "saved with n_uavs = 5, but this run has n_uavs = 6" in capsys.readouterr().err
+
+
+def test_lost_uavs_stay_lost_in_a_warm_start(tmp_path):
+    c = cfg.replace(cfg.default_config(), horizon_weeks=0.01, n_uavs=10, xi=0.3, seed=5)  # 4 of 10 lost
+    result = simulation.simulate(c)
+    lost = result.snapshots[-1]["lost"]
+    assert 0 < lost.sum() < 10
+    fleetfile.save_fleet(result, tmp_path / "fleet.parquet")
+    warm = cfg.replace(c, fleet_file=str(tmp_path / "fleet.parquet"), xi=0.5, horizon_weeks=0.5)
+    st = simulation.initial_state(warm)
+    assert st.fleet.mode.tolist() == [engine.LOST if x else engine.IDLE for x in lost]
+    assert st.counters[engine.N_IDLE] == 10 - lost.sum() and st.counters[engine.N_LOST] == lost.sum()
+    r = run_state(st, warm)
+    assert not np.isin(r.attempts["uav"], np.flatnonzero(lost)).any()
+    assert r.snapshots[-1]["lost"].tolist() == lost.tolist()
+
+
 # ---------------------------------------------------------------------------- whole runs, replayed
 
 
@@ -306,7 +387,8 @@ def test_whole_warm_run_reservations_obey_the_rules(saved_fleet):
         for i in range(c.n_uavs):
             mine = np.flatnonzero(a["uav"] == i)
             busy = (a["allocated_s"][mine] <= t) & ~(a["return_s"][mine] <= t)
-            if busy.any() or waiting_since[i] <= t:
+            gone = a["lost"][mine] & (a["return_s"][mine] <= t)
+            if busy.any() or gone.any() or waiting_since[i] <= t or fleet0.lost[i]:
                 continue
             before = mine[a["return_s"][mine] <= t]
             if before.size:

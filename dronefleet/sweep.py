@@ -24,7 +24,7 @@ last key varies fastest), seeds innermost. Task ``k`` of a job array (0-based) h
 The dataset of a sweep, under ``<results>/<name>/``::
 
     <table>/<key>=<value>/.../seed=<N>/part-0.parquet   one file per run and table
-    _failed/<run id>.json                               runs that raised, with the error
+    _failed/<run id>.json                               runs that raised or whose worker died, with the error
     collected.parquet                                   `sweep collect`: one row per run
     <name>.sbatch, _logs/                               `sweep plan`: job-array script, its logs
 
@@ -37,7 +37,8 @@ they come back from the path), because readers refuse a column that is both. Dir
 starting with ``_`` are skipped by dataset readers.
 
 A run is done when its ``summary`` file (written last, atomically, like every file) exists
-and carries the run's config: a sweep started again skips done runs and redoes the others,
+and carries the run's config (and is newer than the run's ``fleet_file``, if any: see
+:func:`state`): a sweep started again skips done runs and redoes the others,
 replacing what an interrupted attempt wrote. (A kill in the middle of a write can leave a
 hidden ``.part-0.parquet.<pid>.tmp``, which readers ignore.)
 """
@@ -286,10 +287,9 @@ def execute(run: Run, out: Path) -> str | None:
     and its error returned as one line; a run that succeeds removes any such record and
     returns None. Runs in worker processes, so it imports the engine here.
     """
-    from .records import tables, write_atomic, write_table
+    from .records import tables, write_table
     from .simulation import simulate
 
-    failure = run.failure_path(out)
     try:
         # Files of an interrupted attempt are replaced, not deleted first: two processes that
         # happen to run the same run (a task submitted twice) then write the same bytes safely.
@@ -298,13 +298,20 @@ def execute(run: Run, out: Path) -> str | None:
             path.parent.mkdir(parents=True, exist_ok=True)
             write_table(data.drop_columns([k for k in run.keys if k in data.column_names]), path, run.config)
     except Exception as error:  # recorded, and the sweep goes on with the other runs
-        record = {"run": run.partition, "error": f"{type(error).__name__}: {error}",
-                  "traceback": traceback.format_exc(), "config": run.config.to_dict()}
-        failure.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
-        return record["error"]
-    failure.unlink(missing_ok=True)
+        return _record_failure(run, out, f"{type(error).__name__}: {error}", traceback.format_exc())
+    run.failure_path(out).unlink(missing_ok=True)
     return None
+
+
+def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
+    """Write ``_failed/<run id>.json`` (error, traceback, config) for ``run``; return ``error``."""
+    from .records import write_atomic
+
+    record = {"run": run.partition, "error": error, "traceback": trace, "config": run.config.to_dict()}
+    failure = run.failure_path(out)
+    failure.parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
+    return error
 
 
 def _config_difference(a: Config, b: Config) -> str:
@@ -315,9 +322,17 @@ def _config_difference(a: Config, b: Config) -> str:
 def state(run: Run, out: Path) -> str:
     """``done``, ``failed`` or ``missing``: where ``run`` stands in the dataset ``out``.
 
+    A run that starts from a saved fleet (``fleet_file``, ``{seed}`` replaced) is not done
+    once that file is newer than the run's summary: the fleet was written again since (the
+    sweep that made it rerun after a fix, say), so the run's results come from a fleet
+    that is gone, and a rerun replaces them rather than leave old and new fleets mixed in
+    one sweep. (A fleet file that no longer exists leaves the run done: nothing says it is
+    stale.)
+
     Raises SweepError if the run's summary was made with another config (the sweep file
     changed since): new results would silently mix with old ones.
     """
+    from .fleet import seeded_path
     from .records import read_config
 
     summary = run.path(out, "summary")
@@ -326,7 +341,9 @@ def state(run: Run, out: Path) -> str:
         if found != run.config:
             raise SweepError(f"{summary} was made with another config ({_config_difference(found, run.config)}); "
                              f"write to another --results root, or remove {out} to start again")
-        return "done"
+        fleet = seeded_path(run.config.fleet_file, run.config.seed) if run.config.fleet_file else None
+        if fleet is None or not fleet.exists() or fleet.stat().st_mtime_ns <= summary.stat().st_mtime_ns:
+            return "done"
     return "failed" if run.failure_path(out).exists() else "missing"
 
 
@@ -385,6 +402,10 @@ def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | Non
     Dask task per run (the workers write the files: ``out`` must be on a filesystem they
     share). ``progress(finished, to_run, failed)`` is called after every run. Returns the
     number of runs executed and the failed ones with their errors.
+
+    A run whose worker process dies (killed, out of memory, segfault) or that the executor
+    otherwise loses is failed like a run that raises: recorded in ``_failed/<run id>.json``,
+    while the other runs go on (see :mod:`dronefleet.executors`).
     """
     from functools import partial
 
@@ -399,7 +420,11 @@ def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | Non
     else:
         results = executors.dask(function, todo, scheduler, keys=[f"{sweep.name}/{run.id}" for run in todo])
     failures = {}
-    for finished, (run, error) in enumerate(results, start=1):
+    for finished, (run, error, crash) in enumerate(results, start=1):
+        if crash is not None:
+            error = _record_failure(run, out, f"its worker died (killed, out of memory or crashed) while running it: "
+                                              f"{type(crash).__name__}: {crash}",
+                                    "".join(traceback.format_exception(crash)))
         if error is not None:
             failures[run] = error
         if progress is not None:
@@ -451,6 +476,14 @@ def job_script(sweep: Sweep, results: Path, time_limit=None, partition=None, acc
     ])
 
 
+def _done_runs(sweep: Sweep, out: Path) -> list[Run]:
+    """The runs of ``sweep`` that are done in ``out``, in run order; SweepError if none is."""
+    done = [run for run in sweep.runs if state(run, out) == "done"]
+    if not done:
+        raise SweepError(f"no run of sweep {sweep.name} is done in {out}")
+    return done
+
+
 def collect(sweep: Sweep, out: Path):
     """One row per done run, in run order: its partition values (grid keys, seed), then its summary.
 
@@ -463,25 +496,27 @@ def collect(sweep: Sweep, out: Path):
     from . import __version__
     from .records import write_atomic
 
-    rows, not_done = [], []
-    for run in sweep.runs:
-        if state(run, out) != "done":
-            not_done.append(run)
-            continue
+    done = _done_runs(sweep, out)
+    rows = []
+    for run in done:
         summary = pq.read_table(run.path(out, "summary"))
         rows.append(pa.table({**{key: [getattr(run.config, key)] for key in run.keys},
                               **dict(zip(summary.column_names, summary.columns))}))
-    if not rows:
-        raise SweepError(f"no run of sweep {sweep.name} is done in {out}")
     table = pa.concat_tables(rows).replace_schema_metadata(
         {b"dronefleet.sweep": sweep.text, b"dronefleet.version": __version__})
     write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
-    return table, not_done
+    finished = set(done)
+    return table, [run for run in sweep.runs if run not in finished]
 
 
 def dataset(sweep: Sweep, out, table: str):
-    """``table`` of the sweep, in the dataset directory ``out`` (``results/<name>``), as one
-    ``pyarrow.dataset.Dataset`` whose partition columns have the config's types.
+    """``table`` of the sweep's done runs, in the dataset directory ``out`` (``results/<name>``),
+    as one ``pyarrow.dataset.Dataset`` whose partition columns have the config's types.
+
+    Only the files of the runs that the sweep file gives and that are done (see
+    :func:`state`) are read, in run order: ``out/table`` may also hold partitions of runs
+    the file no longer has (it was cut to fewer seeds, say) and tables of runs killed
+    before their summary, which must not enter a figure. Raises SweepError if no run is done.
 
     (Read without a schema, hive partition values come back as strings or int32:
     ``tau_minutes=15.0`` as the string ``"15.0"``.)
@@ -489,9 +524,12 @@ def dataset(sweep: Sweep, out, table: str):
     import pyarrow as pa
     import pyarrow.dataset as ds
 
+    out = Path(out)
+    done = _done_runs(sweep, out)
     types = {float: pa.float64(), int: pa.int64(), str: pa.string()}
     schema = pa.schema([(key, types[PARAMETERS[key].type]) for key in sweep.runs[0].keys])
-    return ds.dataset(Path(out) / table, format="parquet", partitioning=ds.partitioning(schema, flavor="hive"))
+    return ds.dataset([str(run.path(out, table)) for run in done], format="parquet",
+                      partitioning=ds.partitioning(schema, flavor="hive"), partition_base_dir=str(out / table))
 
 
 # --------------------------------------------------------------------------- the commands (see cli.py)

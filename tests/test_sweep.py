@@ -2,13 +2,18 @@
 
 import io
 import json
+import multiprocessing
+import os
+import shutil
 import signal
 import subprocess
 import sys
 import time
+from functools import partial
 from pathlib import Path
 from urllib.parse import unquote
 
+import dask
 import distributed
 import duckdb
 import pandas as pd
@@ -240,6 +245,28 @@ def test_each_table_reads_as_one_table_with_pandas_pyarrow_and_duckdb(smoke):
         sorted((r.config.rule, r.config.tau_minutes, r.config.seed) for r in s.runs)
 
 
+def test_the_typed_dataset_holds_only_the_sweeps_done_runs(smoke, tmp_path):
+    s, smoke_out = smoke
+    out = tmp_path / "smoke"
+    shutil.copytree(smoke_out, out)
+    cut = sw.load_sweep(SMOKE, seeds=[0])  # the file cut to fewer seeds: seed=1 partitions are not its runs
+    killed = cut.runs[1]                    # killed before its summary: its other tables are there
+    killed.path(out, "summary").unlink()
+    done = [run for run in cut.runs if run != killed]
+    for table in ("orders", "summary"):
+        frame = sw.dataset(cut, out, table).to_table().to_pandas()
+        assert len(frame) == sum(pq.read_metadata(run.path(out, table)).num_rows for run in done)
+        assert len(pd.read_parquet(out / table)) > len(frame)  # what a glob of the directory reads
+        assert (frame.tau_minutes.dtype, frame.seed.dtype) == ("float64", "int64")
+        # the runs' rows, in run order
+        keys = list(zip(frame.rule, frame.tau_minutes, frame.seed))
+        assert list(dict.fromkeys(keys)) == [(r.config.rule, r.config.tau_minutes, r.config.seed) for r in done]
+    for run in cut.runs:
+        run.path(out, "summary").unlink(missing_ok=True)
+    with pytest.raises(sw.SweepError, match="no run of sweep smoke is done"):
+        sw.dataset(cut, out, "orders")
+
+
 def test_files_are_the_runs_tables_without_the_partition_columns(smoke):
     s, out = smoke
     run = s.runs[5]
@@ -321,6 +348,51 @@ def test_a_run_that_raises_is_recorded_and_the_others_complete(tmp_path, monkeyp
     assert "8 done, 0 missing, 0 failed" in capsys.readouterr().out
 
 
+CRASH = """
+[sweep]
+name = "crash"
+seeds = [0, 1, 2]
+[set]
+horizon_weeks = 0.5
+[grid]
+rule = ["least_confident", "random"]
+"""
+REAL_EXECUTE = sw.execute
+
+
+def execute_or_die(crash, delay, run, out):
+    """``sweep.execute``, except that the run whose id is ``crash`` kills the worker process
+    running it after ``delay`` seconds (as the kernel's OOM killer would). Module-level:
+    workers import it by name. Only in a worker: in the sweep's own process, it would kill
+    pytest."""
+    if run.id == crash and multiprocessing.parent_process() is not None:
+        time.sleep(delay)
+        os._exit(1)
+    return REAL_EXECUTE(run, out)
+
+
+def test_a_run_that_kills_its_worker_is_recorded_and_the_others_complete(tmp_path, monkeypatch, capsys):
+    path = write(tmp_path, CRASH, name="crash.toml")
+    args = ["--results", str(tmp_path)]
+    # The first run given to a worker: the runs after it go on, on the other worker and on the
+    # one that replaces the dead one.
+    monkeypatch.setattr(sw, "execute", partial(execute_or_die, "rule=least_confident,seed=1", 0.0))
+    assert cli.main(["sweep", "run", str(path), *args, "--jobs", "2"]) == 1
+    died = "its worker died (killed, out of memory or crashed) while running it: BrokenProcessPool: "
+    assert "ran 6, skipped 0 done before, 1 failed" in capsys.readouterr().out
+    record = json.loads((tmp_path / "crash" / "_failed" / "rule=least_confident,seed=1.json").read_text())
+    assert record["error"].startswith(died) and record["config"]["auction"]["rule"] == "least_confident"
+
+    assert cli.main(["sweep", "status", str(path), *args]) == 1
+    printed = capsys.readouterr().out
+    assert "5 done, 0 missing, 1 failed" in printed and f"failed   rule=least_confident/seed=1: {died}" in printed
+
+    monkeypatch.setattr(sw, "execute", REAL_EXECUTE)
+    assert cli.main(["sweep", "run", str(path), *args, "--jobs", "1"]) == 0
+    assert "ran 1, skipped 5 done before, 0 failed" in capsys.readouterr().out
+    assert not list((tmp_path / "crash" / "_failed").glob("*.json"))
+
+
 def test_status_of_a_sweep_not_started(tmp_path, capsys):
     assert cli.main(["sweep", "status", str(SMOKE), "--results", str(tmp_path)]) == 1
     printed = capsys.readouterr().out
@@ -376,6 +448,28 @@ def test_a_killed_sweep_started_again_redoes_only_unfinished_runs(tmp_path, caps
                           "hive_partitioning = true)").df()) == len(pd.read_parquet(clean / "resume" / "orders"))
 
 
+def test_a_warm_started_run_is_redone_when_its_fleet_file_is_written_again(smoke, tmp_path, capsys):
+    s, smoke_out = smoke
+    (tmp_path / "fleets").mkdir()
+    for run in s.runs[-2:]:  # the fleets of the smoke runs at rule=random, tau 30, seeds 0 and 1: 10 UAVs
+        shutil.copyfile(run.path(smoke_out, "fleet"), tmp_path / "fleets" / f"{run.config.seed}.parquet")
+    path = write(tmp_path, f"[sweep]\nname = 'warm'\nseeds = [0, 1]\n[set]\nhorizon_weeks = 0.5\nn_uavs = 10\n"
+                           f"fleet_file = '{tmp_path}/fleets/{{seed}}.parquet'\n[grid]\nrule = ['random']\n")
+    args = ["--results", str(tmp_path), "--jobs", "1"]
+    assert cli.main(["sweep", "run", str(path), *args]) == 0
+    warm, out = sw.load_sweep(path), tmp_path / "warm"
+    # The fleet of seed 1 written again an hour after its run used it (its sweep was rerun).
+    now = time.time()
+    os.utime(warm.runs[1].path(out, "summary"), (now - 7200, now - 7200))
+    os.utime(tmp_path / "fleets" / "1.parquet", (now - 3600, now - 3600))
+    assert [sw.state(run, out) for run in warm.runs] == ["done", "missing"]
+    assert sw.dataset(warm, out, "summary").count_rows() == 1
+    capsys.readouterr()
+    assert cli.main(["sweep", "run", str(path), *args]) == 0
+    assert "ran 1, skipped 1 done before, 0 failed" in capsys.readouterr().out
+    assert [sw.state(run, out) for run in warm.runs] == ["done", "done"]
+
+
 # ---------------------------------------------------------------------------- Dask
 
 
@@ -386,6 +480,25 @@ def test_dask_executor_writes_the_same_dataset(smoke, tmp_path, capsys):
                          "--scheduler", cluster.scheduler_address]) == 0
     assert f"on the Dask cluster at {cluster.scheduler_address}" in capsys.readouterr().out
     assert parquet_bytes(tmp_path / "smoke") == parquet_bytes(smoke[1])
+
+
+def test_a_run_that_kills_its_dask_workers_is_recorded_and_the_others_complete(tmp_path, monkeypatch, capsys):
+    path = write(tmp_path, CRASH, name="crash.toml")
+    # A moment in: a worker dying at once can take the result of its previous run with it while
+    # the client fetches it, which stalls Dask for 30 s.
+    monkeypatch.setattr(sw, "execute", partial(execute_or_die, "rule=random,seed=1", 0.5))
+    # The scheduler gives a task up at its first worker death (KilledWorker; by default at the
+    # fourth): the killer's, and those waiting on the same worker, which fail alike.
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
+            distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                     dashboard_address=None) as cluster:
+        assert cli.main(["sweep", "run", str(path), "--results", str(tmp_path), "--executor", "dask",
+                         "--scheduler", cluster.scheduler_address]) == 1
+    assert cli.main(["sweep", "status", str(path), "--results", str(tmp_path)]) == 1
+    printed = capsys.readouterr().out
+    died = "its worker died (killed, out of memory or crashed) while running it: KilledWorker: "
+    assert f"failed   rule=random/seed=1: {died}" in printed and "0 missing" in printed
+    assert all(died in line for line in printed.splitlines() if line.startswith("  failed"))
 
 
 @pytest.mark.parametrize("args, message", [

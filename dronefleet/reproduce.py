@@ -244,8 +244,8 @@ def draw_fig20(study):
                   f"Figure 20: pending orders after {weeks} more weeks from learned fleets, by arrival week")]
 
 
-TIDY = {name: globals()[f"tidy_{name}"] for name in FIGURES}
-DRAW = {name: globals()[f"draw_{name}"] for name in FIGURES}
+TIDY = {"fig16": tidy_fig16, "fig17": tidy_fig17, "fig18": tidy_fig18, "fig19": tidy_fig19, "fig20": tidy_fig20}
+DRAW = {"fig16": draw_fig16, "fig17": draw_fig17, "fig18": draw_fig18, "fig19": draw_fig19, "fig20": draw_fig20}
 
 
 def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, log=print):

@@ -25,7 +25,7 @@ SECONDS_PER_MINUTE = 60.0
 SECONDS_PER_DAY = 86_400.0
 
 
-def _matplotlib():
+def require_matplotlib():
     """The matplotlib package with the submodules used here, or an error that says how to install it."""
     try:
         import matplotlib
@@ -43,7 +43,7 @@ def _matplotlib():
 @contextmanager
 def _figure(path, title, figsize, **subplots):
     """A new figure and its axes (``Figure.subplots(**subplots)``), saved to ``path`` on exit."""
-    mpl = _matplotlib()
+    mpl = require_matplotlib()
     # The default style also while saving: rcParams are read when artists are drawn.
     with mpl.style.context("default"):
         fig = mpl.figure.Figure(figsize=figsize, layout="constrained")

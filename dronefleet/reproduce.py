@@ -254,6 +254,12 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
     With ``redraw``, only draw, from the tidy parquet tables already written. Returns the
     paths of the figure files, by figure.
     """
+    from .figures import require_matplotlib
+
+    try:
+        require_matplotlib()  # refuse before hours of runs, not after
+    except ImportError as error:
+        raise SweepError(str(error)) from None
     study = Study(results, quick, jobs, log)
     drawn = {}
     for figure in figures:

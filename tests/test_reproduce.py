@@ -129,3 +129,19 @@ def test_quick_sweeps_are_the_study_sweeps_with_fewer_seeds_and_weeks(tmp_path):
         assert {r.config.horizon_weeks for r in q.runs} == {2.0} and {r.config.horizon_weeks for r in f.runs} == {8.0}
     assert len(full.sweep("rules").runs) == 360 and len(full.sweep("thresholds").runs) == 720
     assert isinstance(study.sweep("rules"), sweep.Sweep)
+
+
+def test_without_matplotlib_nothing_runs(tmp_path, monkeypatch, capsys):
+    from dronefleet import figures
+
+    def missing():
+        raise ImportError("drawing figures needs matplotlib: pip install 'dronefleet[plots]'")
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("no run may start without matplotlib")
+
+    monkeypatch.setattr(figures, "require_matplotlib", missing)  # looked up at each call
+    monkeypatch.setattr(reproduce, "run_sweep", forbidden)
+    assert cli.main(["reproduce", "fig16", "--quick", "--results", str(tmp_path)]) == 2
+    assert "pip install 'dronefleet[plots]'" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())

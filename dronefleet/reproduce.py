@@ -63,6 +63,8 @@ class Study:
         self.jobs = jobs or available_cpus()
         self.log = log
         self._sweeps = {}
+        self._ensured = set()   # sweeps checked (and completed) by this study: figures share them
+        self._datasets = {}     # (sweep, table) -> its dataset of done runs, opened once
 
     def sweep(self, name):
         """The sweep ``name``, with --quick's changes; the reservation sweep reads the rules sweep's fleets."""
@@ -93,7 +95,9 @@ class Study:
         return path.parent.parent / "seed={seed}" / path.name
 
     def ensure(self, name):
-        """Run what is missing of sweep ``name``; raise if any run failed."""
+        """Run what is missing of sweep ``name`` (once per study); raise if any run failed."""
+        if name in self._ensured:
+            return
         sweep = self.sweep(name)
         out = self.out(name)
         start = time.perf_counter()
@@ -104,12 +108,15 @@ class Study:
             lines = "\n".join(f"    {run.partition}: {error}" for run, error in failures.items())
             raise SweepError(f"sweep {sweep.name}: {len(failures)} runs failed (dronefleet sweep status "
                              f"{sweep.path} --results {self.root}):\n{lines}")
+        self._ensured.add(name)
 
     def table(self, name, table, **where):
         """Table ``table`` of sweep ``name`` as pandas, with typed grid columns, filtered on ``where``."""
         import pyarrow.compute as pc
 
-        data = dataset(self.sweep(name), self.out(name), table)
+        if (name, table) not in self._datasets:  # finding the done runs reads every run's summary
+            self._datasets[name, table] = dataset(self.sweep(name), self.out(name), table)
+        data = self._datasets[name, table]
         condition = None
         for key, value in where.items():
             term = pc.field(key) == value

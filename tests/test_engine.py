@@ -599,21 +599,30 @@ def test_same_seed_gives_byte_identical_files(tmp_path):
 # ============================================================================ half run
 
 
-@pytest.mark.parametrize("seed", [0, 3])  # a UAV is outbound (0) / returning (3) at 4 weeks
-def test_a_run_is_the_first_half_of_a_run_twice_as_long(seed):
-    base = cfg.replace(cfg.default_config(), n_uavs=25, seed=seed)
-    short = simulation.simulate(cfg.replace(base, horizon_weeks=4.0))
-    long = simulation.simulate(cfg.replace(base, horizon_weeks=8.0))
-    half = 4 * WEEK
-    # Orders that arrived before 4 weeks.
+@pytest.mark.parametrize("phase", ["outbound", "returning"])
+def test_a_run_is_a_prefix_of_a_longer_run(phase):
+    """A run stopped while a UAV is in the air equals the start of a longer run.
+
+    The split instant is taken from the long run itself, in the middle of a flight's
+    outbound (or return) leg in week 4, so a flight spans it on every machine.
+    """
+    base = cfg.replace(cfg.default_config(), n_uavs=25, seed=0)
+    long = simulation.simulate(cfg.replace(base, horizon_weeks=6.0))
+    la = long.attempts
+    j = int(np.flatnonzero(la["takeoff_s"] > 3.5 * WEEK)[0])
+    start, end = (la["takeoff_s"][j], la["turn_s"][j]) if phase == "outbound" else (la["turn_s"][j], la["return_s"][j])
+    short = simulation.simulate(cfg.replace(base, horizon_weeks=(start + end) / 2.0 / WEEK))
+    half = short.config.horizon_s
+    assert start < half < end and half > 3 * WEEK
+    # Orders that arrived before the split.
     n = short.orders["arrival_s"].shape[0]
     assert long.orders["arrival_s"][n - 1] < half <= long.orders["arrival_s"][n]
     for key in ("arrival_s", "distance_m", "mass_kg"):
         np.testing.assert_array_equal(short.orders[key], long.orders[key][:n])
     d_short, d_long = short.orders["delivered_s"], long.orders["delivered_s"][:n]
     np.testing.assert_array_equal(d_short, np.where(d_long <= half, d_long, np.nan))
-    # Attempts that took off by 4 weeks.
-    sa, la = short.attempts, long.attempts
+    # Attempts that took off by the split.
+    sa = short.attempts
     m = sa["uav"].shape[0]
     assert (la["takeoff_s"][:m] <= half).all() and (m == la["uav"].shape[0] or la["takeoff_s"][m] > half)
     for key in ("uav", "order", "takeoff_s", "takeoff_soc"):
@@ -625,13 +634,13 @@ def test_a_run_is_the_first_half_of_a_run_twice_as_long(seed):
     for key in ("return_s", "return_soc"):
         np.testing.assert_array_equal(sa[key], np.where(back, la[key][:m], np.nan))
     np.testing.assert_array_equal(sa["lost"], la["lost"][:m] & back)
-    assert (~back).any()  # some flight spans the 4-week mark
-    # Fleet at the end of weeks 1-4, time series up to 4 weeks.
+    assert not back[j] and turned[j] == (phase == "returning")
+    # Fleet at the end of weeks 1-3, time series up to the split.
     ts, tl = records.tables(short), records.tables(long)
-    fleet_short = ts["fleet"]
-    fleet_long = tl["fleet"].filter(pa.compute.less_equal(tl["fleet"]["week"], 4))
-    assert fleet_short.num_rows == 4 * 25
+    weeks = [pa.compute.less_equal(t["fleet"]["week"], 3) for t in (ts, tl)]
+    fleet_short, fleet_long = ts["fleet"].filter(weeks[0]), tl["fleet"].filter(weeks[1])
+    assert fleet_short.num_rows == 3 * 25
     assert fleet_short.equals(fleet_long)
     k = ts["timeseries"].num_rows
-    assert tl["timeseries"]["t_s"][k - 1].as_py() == half
+    assert tl["timeseries"]["t_s"][k - 1].as_py() <= half < tl["timeseries"]["t_s"][k].as_py()
     assert ts["timeseries"].equals(tl["timeseries"].slice(0, k))

@@ -1,4 +1,4 @@
-"""Tests of dronefleet.supervisor against the six published Nadzoru 2 files."""
+"""Tests of dronefleet.supervisor against the nine published Nadzoru 2 files in tests/data."""
 
 from pathlib import Path
 
@@ -14,11 +14,10 @@ from dronefleet.supervisor import (
     take,
 )
 
-MODELS = Path(__file__).resolve().parents[2] / "shared" / "sct-models"
+#: Copies of the published Nadzoru 2 exports (their README says where each comes from).
+MODELS = Path(__file__).resolve().parent / "data" / "sct-models"
 
-needs_models = pytest.mark.skipif(not MODELS.is_dir(), reason=f"shared Nadzoru files not found at {MODELS}")
-
-# The table of /work/shared/sct-models/README.md:
+# The table of tests/data/sct-models/README.md:
 # file -> (events, supervisors, sum of local states, transitions, bytes).
 README_COUNTS = {
     "uav-delivery-controller.yaml": (9, 1, 6, 39, 1022),
@@ -27,6 +26,9 @@ README_COUNTS = {
     "energy-replenishment-worker.yaml": (10, 4, 32, 124, 3051),
     "energy-replenishment-worker-with-mobile-charger.yaml": (10, 4, 32, 124, 3051),
     "energy-replenishment-charger.yaml": (13, 4, 45, 279, 6432),
+    "replenishment-2024-worker.yaml": (10, 4, 32, 124, 2590),
+    "replenishment-2024-worker-with-mobile-charger.yaml": (10, 4, 30, 150, 3029),
+    "replenishment-2024-charger.yaml": (10, 4, 32, 124, 2646),
 }
 
 REQUIRED_KEYS = ["num_events", "num_supervisors", "events", "ev_controllable", "sup_events",
@@ -45,7 +47,6 @@ def column(automaton, name):
 # --------------------------------------------------------------------------- real files
 
 
-@needs_models
 @pytest.mark.parametrize("name", sorted(README_COUNTS))
 def test_counts_match_readme(name):
     path = MODELS / name
@@ -59,7 +60,6 @@ def test_counts_match_readme(name):
     assert a.init_state.dtype == np.int64 and a.init_state.shape == (n_supervisors,)
 
 
-@needs_models
 def test_packaged_controller_is_the_shared_file():
     assert BUILTIN_CONTROLLER.read_bytes() == (MODELS / "uav-delivery-controller.yaml").read_bytes()
 
@@ -87,7 +87,6 @@ def test_transition_table_follows_requested_columns(uav):
     assert table[0, 0, 1] == 1
 
 
-@needs_models
 def test_event_outside_alphabet_stays_put():
     a = load_supervisor(MODELS / "energy-replenishment-charger.yaml")
     assert a.n_states == (10, 10, 10, 15)
@@ -126,7 +125,6 @@ def test_take_refuses_a_disallowed_event(uav):
     assert states[:, 0].tolist() == [0, 1]
 
 
-@needs_models
 def test_take_is_atomic_over_supervisors():
     a = load_supervisor(MODELS / "energy-replenishment-charger.yaml")
     table = a.transition_table(["rest", "atCharger"])
@@ -196,7 +194,6 @@ def test_vm_input_checks_only_for_uncontrollable_known_events(uav):
         vm.trigger("fly")
 
 
-@needs_models
 def test_vm_trigger_is_atomic_over_supervisors():
     vm = SupervisorVM(load_supervisor(MODELS / "energy-replenishment-charger.yaml"))
     ran = []
@@ -208,7 +205,6 @@ def test_vm_trigger_is_atomic_over_supervisors():
     assert vm.state == (8, 0, 8, 1) and ran == []
 
 
-@needs_models
 def test_vm_outside_alphabet_stays_put():
     vm = SupervisorVM(load_supervisor(MODELS / "energy-replenishment-charger.yaml"))
     assert vm.state == (8, 0, 8, 1)
@@ -218,7 +214,6 @@ def test_vm_outside_alphabet_stays_put():
     assert vm.state == (7, 0, 8, 3)
 
 
-@needs_models
 def test_vm_step_chooses_among_enabled_with_the_rng():
     leader = load_supervisor(MODELS / "multi-human-swarm-leader.yaml")
 
@@ -293,7 +288,6 @@ def test_machine_starts_from_init_state_not_current_state(tmp_path):
     assert SupervisorVM(a).state == (0,)
 
 
-@needs_models
 def test_shared_flags_from_ev_shared_or_ev_public(tmp_path):
     text = (MODELS / "multi-human-swarm-leader.yaml").read_text()
     expected = [False, True, True, False, True, True, True, False, True, False]

@@ -9,10 +9,10 @@ import os
 import sys
 import tempfile
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from . import provenance, reproduce, sweep
+from . import provenance, sweep
 from .config import SECONDS_PER_WEEK, ConfigError, load_config
 
 
@@ -80,13 +80,23 @@ def _writing(path):
         raise OutputError(f"cannot write {str(path)!r}: {error.strerror or error}") from None
 
 
-def _probe_folder(folder):
-    """Create ``folder`` (and its parents) if needed and check that files can be made in it."""
-    with _writing(folder):
-        if folder.exists() and not folder.is_dir():
-            raise NotADirectoryError(errno.ENOTDIR, "Not a directory")
-        folder.mkdir(parents=True, exist_ok=True)
-        os.rmdir(tempfile.mkdtemp(prefix=".dronefleet-probe-", dir=folder))
+def _probe_folders(folders):
+    """Create ``folders`` (and their parents) if needed and check that files can be made in them;
+    if one cannot, remove the folders made here and raise OutputError."""
+    made = []
+    try:
+        for folder in folders:
+            with _writing(folder):
+                if folder.exists() and not folder.is_dir():
+                    raise NotADirectoryError(errno.ENOTDIR, "Not a directory")
+                made += [path for path in (folder, *folder.parents) if not path.exists()]  # deepest first
+                folder.mkdir(parents=True, exist_ok=True)
+                os.rmdir(tempfile.mkdtemp(prefix=".dronefleet-probe-", dir=folder))
+    except OutputError:
+        for path in made:
+            with suppress(OSError):
+                path.rmdir()
+        raise
 
 
 def check_outputs(out, save_fleet, overwrite):
@@ -97,7 +107,11 @@ def check_outputs(out, save_fleet, overwrite):
     """
     from .records import clean_leftovers, run_dir_state
 
-    state = run_dir_state(out)
+    if out.name in ("", ".."):  # "." and "/" normalised have no name: no sibling to write first
+        raise OutputError(f"--out {str(out)!r} must name a folder of its own, e.g. results/runs/mine")
+    with _writing(out):
+        clean_leftovers(out)  # first: it may put back a run that a killed --overwrite had set aside
+        state = run_dir_state(out)
     if state == "file":
         raise OutputError(f"--out {str(out)!r} is a file; it must be a folder (absent, empty or a run)")
     if state == "other":
@@ -105,23 +119,20 @@ def check_outputs(out, save_fleet, overwrite):
     if state in ("complete", "partial") and not overwrite:
         held = "a complete run" if state == "complete" else "part of a run"
         raise OutputError(f"{out} exists and holds {held}; pass --overwrite to replace it or choose another --out")
-    _probe_folder(out.parent)
-    with _writing(out):
-        clean_leftovers(out)
     if save_fleet is not None:
         if save_fleet.is_dir():
             raise OutputError(f"--save-fleet {str(save_fleet)!r} is a folder; it must be a file")
         if save_fleet.exists() and not overwrite:
             raise OutputError(f"--save-fleet {str(save_fleet)!r} exists; pass --overwrite to replace it "
                               "or choose another --save-fleet")
-        _probe_folder(save_fleet.parent)
+    _probe_folders([out.parent, *([save_fleet.parent] if save_fleet is not None else [])])
 
 
 def run(args):
     overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
     config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
     name = Path(args.config).stem if args.config else "paper"
-    out = Path(args.out) if args.out else default_out(name, config)
+    out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 
     from .fleet import load_fleet, save_fleet, seeded_path
     from .metrics import run_metrics
@@ -159,7 +170,9 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def build_parser():
+def build_parser(reproduce_arguments=True):
+    """The parser; without ``reproduce_arguments`` the reproduce command is only listed, so that
+    ``dronefleet --help`` and ``--version`` do not import pandas and numba (:mod:`dronefleet.reproduce`)."""
     parser = argparse.ArgumentParser(prog="dronefleet", description=__doc__)
     parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -182,7 +195,7 @@ def build_parser():
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.set_defaults(func=run)
     _add_sweep_commands(commands)
-    _add_reproduce_command(commands)
+    _add_reproduce_command(commands, reproduce_arguments)
     return parser
 
 
@@ -227,10 +240,14 @@ def _add_sweep_commands(commands):
     p.set_defaults(func=sweep.collect_command)
 
 
-def _add_reproduce_command(commands):
+def _add_reproduce_command(commands, arguments):
     """``dronefleet reproduce FIGURE``; the work is in :mod:`dronefleet.reproduce`."""
     p = commands.add_parser("reproduce", help="reproduce a figure of the study (runs what is missing)",
                             description="See results/README.md for what each figure runs and shows.")
+    if not arguments:
+        return
+    from . import reproduce
+
     p.add_argument("figure", choices=(*reproduce.FIGURES, "all"))
     p.add_argument("--quick", action="store_true",
                    help=f"seeds {reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]}, "
@@ -242,7 +259,8 @@ def _add_reproduce_command(commands):
 
 
 def main(argv=None):
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(reproduce_arguments="reproduce" in argv).parse_args(argv)
     try:
         return args.func(args)
     except ConfigError as error:  # bad input (config, sweep, fleet file): refused before any work

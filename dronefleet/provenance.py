@@ -36,12 +36,11 @@ def _git(source, *args):
     return done.stdout.strip() if done.returncode == 0 else None
 
 
-@functools.cache
-def git_commit():
-    """The commit of the source tree this package runs from, ``-dirty`` if tracked files differ
-    from it; None unless the package's parent folder is the top of a git checkout (an installed
-    wheel inside some other repository is not one of ours)."""
-    source = Path(__file__).resolve().parent.parent
+def commit_of(source):
+    """The commit checked out in the git tree whose top is ``source``, ``-dirty`` if tracked files
+    differ from it (``-unknown`` if that cannot be told); None if ``source`` is not the top of a
+    checkout, or git is missing, fails or hangs."""
+    source = Path(source).resolve()
     top = _git(source, "rev-parse", "--show-toplevel")
     if top is None or Path(top).resolve() != source:
         return None
@@ -49,7 +48,14 @@ def git_commit():
     if commit is None:
         return None
     changes = _git(source, "status", "--porcelain", "--untracked-files=no")
-    return commit + ("-dirty" if changes else "") if changes is not None else commit + "-unknown"
+    return commit + ("-unknown" if changes is None else "-dirty" if changes else "")
+
+
+@functools.cache
+def git_commit():
+    """The commit of the source tree this package runs from (:func:`commit_of` its parent folder):
+    an installed wheel has none, even inside some other repository. Looked up once per process."""
+    return commit_of(Path(__file__).resolve().parent.parent)
 
 
 def _version(distribution):

@@ -181,17 +181,18 @@ def run_dir_state(out_dir):
     """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table of a run),
     ``"partial"`` (some tables and nothing else: left by a dronefleet before complete-or-absent
     run folders), ``"file"`` (not a folder) or ``"other"`` (files that are not a run's tables).
-    Hidden entries are ignored."""
+    Hidden entries (``.DS_Store``, ...) go with the run, but a folder holding only those is not empty."""
     out_dir = Path(out_dir)
     if not out_dir.exists():
         return "absent"
     if not out_dir.is_dir():
         return "file"
-    names = {p.name for p in out_dir.iterdir() if not p.name.startswith(".")}
+    entries = [p.name for p in out_dir.iterdir()]
+    names = {name for name in entries if not name.startswith(".")}
     tables = {f"{name}.parquet" for name in TABLES}
-    if not names:
+    if not entries:
         return "empty"
-    if not names <= tables:
+    if not names or not names <= tables:
         return "other"
     return "complete" if names == tables else "partial"
 

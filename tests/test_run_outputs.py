@@ -89,6 +89,16 @@ def _other_files(root):
     (root / "run" / "notes.txt").write_text("mine")
 
 
+def _part_of_a_run(root):
+    (root / "run").mkdir()
+    (root / "run" / "orders.parquet").write_bytes(b"left by an older dronefleet")
+
+
+def _hidden_only(root):
+    (root / "run").mkdir()
+    (root / "run" / ".DS_Store").write_bytes(b"")
+
+
 def _save_fleet_folder(root):
     (root / "fleet.parquet").mkdir()
 
@@ -103,6 +113,8 @@ HOSTILE = [  # (what is already there, run arguments, message fragment)
     (_file, ["--out", "{root}/run", "--save-fleet", "{root}/a-file/fleet.parquet"], "Not a directory"),
     (_other_files, ["--out", "{root}/run"], "holds files other than a run's tables; choose another --out"),
     (_other_files, ["--out", "{root}/run", "--overwrite"], "holds files other than a run's tables"),
+    (_part_of_a_run, ["--out", "{root}/run"], "exists and holds part of a run; pass --overwrite"),
+    (_hidden_only, ["--out", "{root}/run", "--overwrite"], "holds files other than a run's tables"),
     (_save_fleet_folder, ["--out", "{root}/run", "--save-fleet", "{root}/fleet.parquet"], "is a folder"),
     (_save_fleet_exists, ["--out", "{root}/run", "--save-fleet", "{root}/fleet.parquet"],
      "exists; pass --overwrite to replace it or choose another --save-fleet"),
@@ -205,8 +217,11 @@ def test_a_failed_fleet_save_leaves_no_fleet_file(tmp_path, capsys, monkeypatch)
 # ---------------------------------------------------------------------------- --overwrite, SIGKILL
 
 
-def test_overwrite_replaces_a_run_and_leaves_nothing_beside_it(old_run, tmp_path, capsys):
+@pytest.mark.parametrize("partial", [False, True])
+def test_overwrite_replaces_a_run_and_leaves_nothing_beside_it(old_run, tmp_path, capsys, partial):
     out = _copy_run(old_run, tmp_path / "run")
+    if partial:  # as an older dronefleet left an interrupted run
+        (out / "summary.parquet").unlink()
     (tmp_path / "fleet.parquet").write_bytes(b"an older fleet")
     code, _, _ = _run([*SHORT, "--seed", "2", "--out", str(out), "--overwrite",
                        "--save-fleet", str(tmp_path / "fleet.parquet")], capsys)

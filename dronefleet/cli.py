@@ -1,14 +1,23 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
-[--fleet FILE] [--save-fleet FILE]``; ``dronefleet sweep plan|run|status|collect SWEEP``;
+[--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet sweep plan|run|status|collect SWEEP``;
 ``dronefleet reproduce fig16..fig20|all [--quick]``."""
 
 import argparse
+import errno
+import hashlib
+import os
 import sys
+import tempfile
 import time
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from . import reproduce, sweep
+from . import provenance, sweep
 from .config import SECONDS_PER_WEEK, ConfigError, load_config
+
+
+class OutputError(ConfigError):
+    """An output path that cannot take the run's files, or a write that failed (disk full, ...)."""
 
 
 class ProgressBar:
@@ -55,18 +64,84 @@ def format_summary(m, wall_s):
     return "\n".join(f"  {label:<22}{value}" for label, value in lines)
 
 
+def default_out(name, config):
+    """``results/runs/<name>-seed<N>-<8 hex>``: the hex digits start the SHA-256 of the resolved
+    config's JSON, so runs of different configs (``--set``, ``--fleet``) never share a folder."""
+    digest = hashlib.sha256(config.to_json().encode()).hexdigest()[:8]
+    return Path("results") / "runs" / f"{name}-seed{config.seed}-{digest}"
+
+
+@contextmanager
+def _writing(path):
+    """Turn an OSError while writing ``path`` (disk full, read-only, ...) into a one-line OutputError."""
+    try:
+        yield
+    except OSError as error:
+        raise OutputError(f"cannot write {str(path)!r}: {error.strerror or error}") from None
+
+
+def _probe_folders(folders):
+    """Create ``folders`` (and their parents) if needed and check that files can be made in them;
+    if one cannot, remove the folders made here and raise OutputError."""
+    made = []
+    try:
+        for folder in folders:
+            with _writing(folder):
+                if folder.exists() and not folder.is_dir():
+                    raise NotADirectoryError(errno.ENOTDIR, "Not a directory")
+                made += [path for path in (folder, *folder.parents) if not path.exists()]  # deepest first
+                folder.mkdir(parents=True, exist_ok=True)
+                os.rmdir(tempfile.mkdtemp(prefix=".dronefleet-probe-", dir=folder))
+    except OutputError:
+        for path in made:
+            with suppress(OSError):
+                path.rmdir()
+        raise
+
+
+def check_outputs(out, save_fleet, overwrite):
+    """Refuse, before any work, outputs that the run could not write or would silently replace.
+
+    ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder; its parent
+    and ``save_fleet``'s folder must be writable; ``save_fleet`` must not exist unless ``overwrite``.
+    """
+    from .records import clean_leftovers, run_dir_state
+
+    if out.name in ("", ".."):  # "." and "/" normalised have no name: no sibling to write first
+        raise OutputError(f"--out {str(out)!r} must name a folder of its own, e.g. results/runs/mine")
+    with _writing(out):
+        clean_leftovers(out)  # first: it may put back a run that a killed --overwrite had set aside
+        state = run_dir_state(out)
+    if state == "file":
+        raise OutputError(f"--out {str(out)!r} is a file; it must be a folder (absent, empty or a run)")
+    if state == "other":
+        raise OutputError(f"--out {str(out)!r} holds files other than a run's tables; choose another --out")
+    if state in ("complete", "partial") and not overwrite:
+        held = "a complete run" if state == "complete" else "part of a run"
+        raise OutputError(f"{out} exists and holds {held}; pass --overwrite to replace it or choose another --out")
+    if save_fleet is not None:
+        if save_fleet.is_dir():
+            raise OutputError(f"--save-fleet {str(save_fleet)!r} is a folder; it must be a file")
+        if save_fleet.exists() and not overwrite:
+            raise OutputError(f"--save-fleet {str(save_fleet)!r} exists; pass --overwrite to replace it "
+                              "or choose another --save-fleet")
+    _probe_folders([out.parent, *([save_fleet.parent] if save_fleet is not None else [])])
+
+
 def run(args):
     overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
     config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
     name = Path(args.config).stem if args.config else "paper"
-    out = Path(args.out) if args.out else Path("results") / "runs" / f"{name}-seed{config.seed}"
+    out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 
-    from .fleet import load_fleet, save_fleet
+    from .fleet import load_fleet, save_fleet, seeded_path
     from .metrics import run_metrics
     from .records import write_run
     from .simulation import simulate
 
     fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None  # refused before any work
+    fleet_out = seeded_path(args.save_fleet, config.seed) if args.save_fleet else None
+    check_outputs(out, fleet_out, args.overwrite)
 
     print(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
           f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
@@ -74,23 +149,45 @@ def run(args):
     start = time.perf_counter()
     result = simulate(config, progress=ProgressBar(config.horizon_s), fleet=fleet)
     wall = time.perf_counter() - start
-    write_run(result, out)
+    with _writing(out):
+        write_run(result, out, overwrite=args.overwrite)
     print(format_summary(run_metrics(result), wall))
     print(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
-    if args.save_fleet:
-        print(f"  {'saved fleet':<22}{save_fleet(result, args.save_fleet)}")
+    if fleet_out is not None:
+        with _writing(fleet_out):
+            print(f"  {'saved fleet':<22}{save_fleet(result, fleet_out)}")
     return 0
 
 
-def build_parser():
+class _Version(argparse.Action):
+    """``--version``: ``dronefleet <version> (commit <sha>)``; the commit is looked up only when asked."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, help="print the version (and git commit) and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(provenance.version_line())
+        parser.exit()
+
+
+def build_parser(reproduce_arguments=True):
+    """The parser; without ``reproduce_arguments`` the reproduce command is only listed, so that
+    ``dronefleet --help`` and ``--version`` do not import pandas and numba (:mod:`dronefleet.reproduce`)."""
     parser = argparse.ArgumentParser(prog="dronefleet", description=__doc__)
+    parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
     p = commands.add_parser("run", help="simulate one run and write its tables as parquet")
     p.add_argument("config", nargs="?", help="TOML config file (default: the paper's scenario)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set tau_minutes=20 or --set auction.rule=random")
     p.add_argument("--seed", type=int, help="seed of the run (overrides run.seed)")
-    p.add_argument("--out", help="output directory (default: results/runs/<config>-seed<N>)")
+    p.add_argument("--out", metavar="DIR",
+                   help="output folder, written complete or not at all (default: results/runs/<config>-seed<N>-<H>, "
+                        "H the first 8 hex digits of the SHA-256 of the resolved config as JSON, so runs of "
+                        "different configs never share a folder)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace the run already in --out (and the file --save-fleet names); without it, "
+                        "the run is refused before any work")
     p.add_argument("--fleet", metavar="FILE",
                    help="start from a saved fleet (parquet, '{seed}' is replaced by the seed); "
                         "same as --set run.fleet_file=FILE")
@@ -98,7 +195,7 @@ def build_parser():
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.set_defaults(func=run)
     _add_sweep_commands(commands)
-    _add_reproduce_command(commands)
+    _add_reproduce_command(commands, reproduce_arguments)
     return parser
 
 
@@ -143,10 +240,14 @@ def _add_sweep_commands(commands):
     p.set_defaults(func=sweep.collect_command)
 
 
-def _add_reproduce_command(commands):
+def _add_reproduce_command(commands, arguments):
     """``dronefleet reproduce FIGURE``; the work is in :mod:`dronefleet.reproduce`."""
     p = commands.add_parser("reproduce", help="reproduce a figure of the study (runs what is missing)",
                             description="See results/README.md for what each figure runs and shows.")
+    if not arguments:
+        return
+    from . import reproduce
+
     p.add_argument("figure", choices=(*reproduce.FIGURES, "all"))
     p.add_argument("--quick", action="store_true",
                    help=f"seeds {reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]}, "
@@ -158,7 +259,8 @@ def _add_reproduce_command(commands):
 
 
 def main(argv=None):
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    args = build_parser(reproduce_arguments="reproduce" in argv).parse_args(argv)
     try:
         return args.func(args)
     except ConfigError as error:  # bad input (config, sweep, fleet file): refused before any work

@@ -1,9 +1,10 @@
 """A run's tables (MODEL.md section 10), its metrics (section 11) and their parquet files.
 
 Every file carries the full resolved config (JSON) in its schema metadata under
-``dronefleet.config``. Files are written under a temporary name and renamed, so a
-reader never sees a truncated file; ``summary.parquet`` is written last and so marks a
-complete run.
+``dronefleet.config``, and what made it under ``dronefleet.provenance`` (see
+:mod:`dronefleet.provenance`). Files are written under a temporary name and renamed, so a
+reader never sees a truncated file. A run folder is complete or absent: its tables are
+written into a hidden sibling folder that is renamed into place (:func:`write_run`).
 
 Schemas (times in seconds from the start of the run, SoC in percent, null = did not happen
 by the horizon):
@@ -34,8 +35,11 @@ period int16 (operating period: 1, or the saved fleet's plus one for a warm star
 :func:`dronefleet.metrics.run_metrics`.
 """
 
+import errno
 import json
 import os
+import re
+import shutil
 import socket
 from pathlib import Path
 
@@ -43,10 +47,10 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from . import __version__
 from .config import SECONDS_PER_WEEK, config_from_dict
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
 from .metrics import accuracy_points, decision_accuracy, run_metrics
+from .provenance import stamp
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 CONFIG_KEY = b"dronefleet.config"
@@ -144,6 +148,11 @@ def tables(result):
             "timeseries": timeseries_table(result), "summary": summary_table(result)}
 
 
+def _temporary_name(path, kind):
+    """Hidden sibling of ``path`` for this host and process: ``.<name>.<host>-<pid>.<kind>``."""
+    return path.with_name(f".{path.name}.{socket.gethostname()}-{os.getpid()}.{kind}")
+
+
 def write_atomic(path, write):
     """``write(tmp)`` a hidden sibling temporary file, then rename it to ``path``; return ``path``.
 
@@ -153,7 +162,7 @@ def write_atomic(path, write):
     never collide.
     """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.{socket.gethostname()}-{os.getpid()}.tmp")
+    tmp = _temporary_name(path, "tmp")
     try:
         write(tmp)
         os.replace(tmp, path)
@@ -163,17 +172,102 @@ def write_atomic(path, write):
 
 
 def write_table(table, path, config):
-    """Write ``table`` to ``path`` atomically, with the resolved ``config`` in its metadata."""
-    table = table.replace_schema_metadata({CONFIG_KEY: config.to_json(), b"dronefleet.version": __version__})
+    """Write ``table`` to ``path`` atomically, with the resolved ``config`` and the provenance in its metadata."""
+    table = stamp(table.replace_schema_metadata({CONFIG_KEY: config.to_json()}))
     return write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
-def write_run(result, out_dir):
-    """Write every table of ``result`` as ``out_dir/<table>.parquet``, summary last; return the paths."""
+def run_dir_state(out_dir):
+    """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table of a run),
+    ``"partial"`` (some tables and nothing else: left by a dronefleet before complete-or-absent
+    run folders), ``"file"`` (not a folder) or ``"other"`` (files that are not a run's tables).
+    Hidden entries (``.DS_Store``, ...) go with the run, but a folder holding only those is not empty."""
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    return {name: write_table(table, out_dir / f"{name}.parquet", result.config)
-            for name, table in tables(result).items()}
+    if not out_dir.exists():
+        return "absent"
+    if not out_dir.is_dir():
+        return "file"
+    entries = [p.name for p in out_dir.iterdir()]
+    names = {name for name in entries if not name.startswith(".")}
+    tables = {f"{name}.parquet" for name in TABLES}
+    if not entries:
+        return "empty"
+    if not names or not names <= tables:
+        return "other"
+    return "complete" if names == tables else "partial"
+
+
+def clean_leftovers(out_dir):
+    """Remove what interrupted writers of the run folder ``out_dir`` left beside it.
+
+    Only this host's leftovers whose process is gone are touched. A killed replacement
+    may have left the previous run aside (``.<name>.<host>-<pid>.old``) and no run in
+    place: that run is put back, so the folder again holds the old complete run.
+    """
+    out_dir = Path(out_dir)
+    pattern = re.compile(rf"\.{re.escape(out_dir.name)}\.{re.escape(socket.gethostname())}-(\d+)\.(tmp|old)")
+    if not out_dir.parent.is_dir():
+        return
+    for leftover in sorted(out_dir.parent.iterdir(), key=lambda p: p.name.endswith(".tmp")):  # .old first
+        match = pattern.fullmatch(leftover.name)
+        if match is None or _alive(int(match[1])):
+            continue
+        if match[2] == "old" and run_dir_state(out_dir) in ("absent", "empty"):
+            os.replace(leftover, out_dir)
+        else:
+            shutil.rmtree(leftover, ignore_errors=True)
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def write_run(result, out_dir, overwrite=False):
+    """Write every table of ``result`` as ``out_dir/<table>.parquet``; return the paths.
+
+    The folder is complete or absent: the tables go into the hidden sibling
+    ``.<name>.<host>-<pid>.tmp``, which is then renamed to ``out_dir`` (atomic on POSIX). An
+    existing run is replaced only with ``overwrite``: it is renamed aside to ``...old``, the
+    new one renamed in, the old one deleted. A crash at any point leaves the old complete
+    run or the new one, plus at most a hidden leftover that :func:`clean_leftovers` (called
+    here first) removes or, if the crash fell between the two renames, puts back in place.
+
+    Raises
+    ------
+    FileExistsError
+        If ``out_dir`` holds a run and not ``overwrite``, or holds files other than a run's
+        tables (never deleted, whatever ``overwrite``).
+    OSError
+        Any failure to write (disk full, read-only, ...); ``out_dir`` is then as it was.
+    """
+    out_dir = Path(out_dir)
+    clean_leftovers(out_dir)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    tmp, aside = _temporary_name(out_dir, "tmp"), _temporary_name(out_dir, "old")
+    try:
+        tmp.mkdir()
+        paths = {name: out_dir / write_table(table, tmp / f"{name}.parquet", result.config).name
+                 for name, table in tables(result).items()}
+        state = run_dir_state(out_dir)
+        if state in ("complete", "partial") and overwrite:
+            os.replace(out_dir, aside)
+        elif state not in ("absent", "empty"):
+            why = {"other": "holds files other than a run's tables", "file": "is a file"}.get(state, "holds a run")
+            raise FileExistsError(errno.EEXIST, why, str(out_dir))
+        os.replace(tmp, out_dir)  # fails, leaving out_dir as it is, if another writer came first
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if aside.exists() and not out_dir.exists():
+            os.replace(aside, out_dir)
+        raise
+    shutil.rmtree(aside, ignore_errors=True)
+    return paths
 
 
 def read_config(path):

@@ -31,6 +31,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from . import analysis
+from .provenance import stamp
 from .records import write_atomic
 from .sweep import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
 
@@ -133,7 +134,7 @@ class Study:
 
 
 def _write_parquet(frame, path):
-    table = pa.Table.from_pandas(frame, preserve_index=False)
+    table = stamp(pa.Table.from_pandas(frame, preserve_index=False))
     write_atomic(path, lambda tmp: pq.write_table(table, tmp))
     return path
 

@@ -493,7 +493,7 @@ def collect(sweep: Sweep, out: Path):
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from . import __version__
+    from .provenance import stamp
     from .records import write_atomic
 
     done = _done_runs(sweep, out)
@@ -502,8 +502,7 @@ def collect(sweep: Sweep, out: Path):
         summary = pq.read_table(run.path(out, "summary"))
         rows.append(pa.table({**{key: [getattr(run.config, key)] for key in run.keys},
                               **dict(zip(summary.column_names, summary.columns))}))
-    table = pa.concat_tables(rows).replace_schema_metadata(
-        {b"dronefleet.sweep": sweep.text, b"dronefleet.version": __version__})
+    table = stamp(pa.concat_tables(rows).replace_schema_metadata({b"dronefleet.sweep": sweep.text}))
     write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
     finished = set(done)
     return table, [run for run in sweep.runs if run not in finished]

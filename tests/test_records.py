@@ -241,12 +241,10 @@ def test_failed_write_keeps_the_previous_file(small_run, tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir()] == ["orders.parquet"]
 
 
-def test_interrupted_run_has_no_summary(small_run, tmp_path, monkeypatch):
+def test_interrupted_run_leaves_no_run_folder(small_run, tmp_path, monkeypatch):
     write, calls = _failing_writer(calls_before_failure=2)
     monkeypatch.setattr(pq, "write_table", write)
     with pytest.raises(_Boom):
-        records.write_run(small_run, tmp_path)
-    names = sorted(p.name for p in tmp_path.iterdir())
-    assert names == ["attempts.parquet", "orders.parquet"]  # complete files only, no summary
-    for name in names:
-        pq.read_table(tmp_path / name)
+        records.write_run(small_run, tmp_path / "run")
+    assert len(calls) == 3
+    assert list(tmp_path.iterdir()) == []  # neither the run folder nor its hidden temporary

@@ -27,7 +27,7 @@ log     all float64                            1 ulp           log(0) = -inf, lo
                                                                log(inf) = inf, nan -> nan
 sin     |x| <= 1e6 (nan outside, and inf)      1 ulp
 cos     |x| <= 1e6 (nan outside, and inf)      1 ulp
-atan2   all float64 pairs                      2 ulp           as C99 (signed zeros, infinities)
+atan2   all float64 pairs                      1 ulp           as C99 (signed zeros, infinities)
 ======  =====================================  ==============  ==================
 
 exp(0) = 1 and log(1) = 0 exactly. The 1e6 domain of sin/cos is that of fdlibm's

@@ -134,11 +134,14 @@ def test_table_digest_ignores_metadata_and_nothing_else():
 
 
 def test_same_fingerprints_with_older_cpu_code_paths(tmp_path):
+    # These libraries choose their code paths when they load, so the compiled engine (from the
+    # numba cache, as any sweep worker loads it) calls the older paths too.
     knobs = {"GLIBC_TUNABLES": "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX512F", "OPENBLAS_CORETYPE": "Prescott",
-             "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache"), **_numpy_knob()}
+             **_numpy_knob()}
     assert _fingerprints_in_subprocess(knobs, tmp_path) == EXPECTED
 
 
 def test_same_fingerprints_compiled_for_a_generic_cpu(tmp_path):
+    # A fresh cache: numba compiles the engine again, for a CPU without SSE4/AVX/FMA.
     knobs = {"NUMBA_CPU_NAME": "generic", "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
     assert _fingerprints_in_subprocess(knobs, tmp_path) == EXPECTED

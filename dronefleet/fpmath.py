@@ -176,7 +176,6 @@ _COS_LARGE = 0.7812504768371582     # high word 0x3fe90001
 _PI_4_HW = 0.7853984832763672       # high word 0x3fe921fc: |x| below needs no reduction
 _INV_PIO2 = 6.36619772367581382433e-01
 _PIO2_1 = 1.57079632673412561417e+00   # first 33 bits of pi/2
-_PIO2_1T = 6.07710050650619224932e-11  # pi/2 - _PIO2_1
 _PIO2_2 = 6.07710050630396597660e-11   # second 33 bits
 _PIO2_2T = 2.02226624879595063154e-21
 _PIO2_3 = 2.02226624871116645580e-21   # third 33 bits
@@ -226,7 +225,6 @@ def _reduce(x):
     n = int(t * _INV_PIO2 + 0.5)
     fn = float(n)
     r = t - fn * _PIO2_1  # fn * _PIO2_1 is exact: n < 2^20
-    w = fn * _PIO2_1T
     u = r
     w = fn * _PIO2_2
     r = u - w

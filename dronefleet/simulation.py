@@ -169,7 +169,11 @@ def _attempt_table(capacity, old=None):
 
 
 def advance(state, t_stop):
-    """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed."""
+    """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed.
+
+    Raises SupervisorError if the supervisor refuses an event, InvalidStateError if the state
+    has no valid next event (non-finite inputs).
+    """
     while True:
         status = engine.advance(state.book, state.fleet, state.attempts, state.series, state.counters,
                                 state.params, state.table, state.bid_rng, t_stop)

@@ -33,6 +33,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from .fpmath import log
+
 BIDS_ON = {"policy": 0, "soc_threshold": 1, "any": 2}
 
 
@@ -86,7 +88,7 @@ def reservation_wait(f_soc, w_soc, soc, soc_mean, soc_std, charge_rate):
         return np.inf
     if need <= soc:  # the caller asks only when f < 0; rounding can put s* a hair below SoC
         return 0.0
-    return np.log((100.0 - soc) / (100.0 - need)) / charge_rate
+    return log((100.0 - soc) / (100.0 - need)) / charge_rate
 
 
 class Rule(NamedTuple):

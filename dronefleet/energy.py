@@ -8,6 +8,8 @@ fulfilment centre. Nothing here steps time.
 import numpy as np
 from numba import njit
 
+from .fpmath import exp
+
 SECONDS_PER_HOUR = 3600.0
 
 #: SoC (percent) below which a UAV counts as lost. With xi = 0.5 an aborted UAV
@@ -22,7 +24,8 @@ def flight_power(payload_kg, frame_mass_kg, battery_mass_kg, n_rotors, rotor_are
     ``payload_kg`` may be a scalar or an array; the result has its shape.
     """
     weight = gravity_m_s2 * (frame_mass_kg + battery_mass_kg + np.asarray(payload_kg, dtype=np.float64))
-    return weight ** 1.5 / np.sqrt(2.0 * n_rotors * air_density_kg_m3 * rotor_area_m2)
+    # w * sqrt(w), not w ** 1.5: pow takes CPU-specific code paths (see dronefleet.fpmath).
+    return weight * np.sqrt(weight) / np.sqrt(2.0 * n_rotors * air_density_kg_m3 * rotor_area_m2)
 
 
 def config_power(config, payload_kg):
@@ -44,7 +47,7 @@ def charge_rate(capacity_wh, charger_power_w, charger_efficiency):
 @njit(cache=True)
 def soc_after_charging(soc0, seconds, k):
     """SoC (percent) after charging for ``seconds`` from ``soc0`` with rate constant ``k`` (1/s)."""
-    return 100.0 - (100.0 - soc0) * np.exp(-k * seconds)
+    return 100.0 - (100.0 - soc0) * exp(-k * seconds)
 
 
 @njit(cache=True)

@@ -25,6 +25,7 @@ from numba import njit
 
 from .auction import bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
+from .fpmath import log
 from .policy import decision, sgd_step
 from .supervisor import take
 
@@ -39,8 +40,9 @@ OUTCOME_NAMES = ("in_flight", "delivered", "aborted")
 EVENT_NAMES = ("capableTask", "notCapableTask", "bid", "wonBid", "lostBid", "deliver", "condReturn", "return")
 EV_CAPABLE, EV_NOT_CAPABLE, EV_BID, EV_WON, EV_LOST_BID, EV_DELIVER, EV_COND_RETURN, EV_RETURN = range(8)
 
-# Status returned by ``advance``.
-DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED = 0, 1, 2
+# Status returned by ``advance``. INVALID_STATE: no event fits the state (e.g. a NaN event time
+# from non-finite input); the kernel stops rather than write anywhere.
+DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED, INVALID_STATE = 0, 1, 2, 3
 
 # Slots of the int64 ``counters`` array (scalars the kernel updates in place).
 (NEXT_ORDER, QUEUE_LEN, LAST_ADVERTISED, NEXT_TICK, N_ATTEMPTS, NEXT_SAMPLE, N_DELIVERED, N_ABORTED,
@@ -56,6 +58,9 @@ F_MARGIN = 1e-9     # in decision-function units, relative
 SOC_MARGIN = 1e-12  # percent
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
+#: Tick indices from here on stand for "never" (NO_TICK): k * interval is no longer exact
+#: for larger k, and no run processes 2^52 ticks.
+MAX_TICK = 2.0 ** 52
 
 
 class Params(NamedTuple):
@@ -179,15 +184,21 @@ def first_tick_at_or_after(t, interval):
     """The smallest tick index k with k * interval >= t, exactly as the loop computes tick times.
 
     ``ceil(t / interval)`` alone can be off by one when the division or the product rounds.
-    An infinite ``t`` (no such event) gives a tick index beyond any run.
+    An infinite or NaN ``t``, or a ratio ``t / interval`` of MAX_TICK or more (a tiny interval
+    or a far event), gives NO_TICK, a tick index beyond any run; nothing can overflow.
     """
-    if t == np.inf:
+    q = t / interval
+    if not q < MAX_TICK:
         return NO_TICK
-    k = np.int64(np.ceil(t / interval))
-    while k * interval < t:
-        k += 1
-    while k > 0 and (k - 1) * interval >= t:
-        k -= 1
+    k = np.int64(np.ceil(q))
+    # Below MAX_TICK, ceil(q) is within one of the answer (q and k * interval each round
+    # once, and interval > t / 2^52); the bounded loops make a hang impossible regardless.
+    for _ in range(4):
+        if k * interval < t:
+            k += 1
+    for _ in range(4):
+        if k > 0 and (k - 1) * interval >= t:
+            k -= 1
     return k
 
 
@@ -262,7 +273,7 @@ def _earliest_bid(book, fleet, counters, params, t):
             return t
         gap = 100.0 - need + SOC_MARGIN
         if gap > 0.0:
-            earliest = min(earliest, t + np.log((100.0 - soc) / gap) / params.charge_rate)
+            earliest = min(earliest, t + log((100.0 - soc) / gap) / params.charge_rate)
     return earliest
 
 
@@ -435,18 +446,21 @@ def _reserved_takeoff(book, fleet, params, i, order, t, wait):
     At t + wait its SoC reaches the level at which its policy says "bid", up to rounding;
     the instant is moved on by a few units in the last place until the decision computed
     as at takeoff is >= 0, so the reserved flight never starts on a "no". This ends
-    because the policy says "bid" at SoC 100 (checked in :func:`_reservation_bids`).
+    because the policy says "bid" at SoC 100 (checked in :func:`_reservation_bids`); only
+    non-finite inputs can run the doubling steps to inf, and then the instant is NaN, which
+    ``advance`` reports as INVALID_STATE.
     """
     x0 = book.x_distance[order]
     x1 = book.x_mass[order]
     takeoff = t + wait
     step = abs(takeoff) * 2.2e-16 + 1e-300
-    while True:
+    while takeoff < np.inf:
         soc = soc_after_charging(fleet.soc_ref[i], takeoff - fleet.t_ref[i], params.charge_rate)
         if decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std) >= 0.0:
             return takeoff
         takeoff += step
         step *= 2.0
+    return np.nan
 
 
 @njit(cache=True)
@@ -575,8 +589,10 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
     All arguments but ``params``, ``table`` (compiled supervisor, (K, states, events)
     int64) and ``rng`` (random-bid stream) are updated in place. Returns DONE,
     ATTEMPTS_FULL (stopped before an event that needs a new attempt row: grow
-    ``attempts`` and call again) or SUPERVISOR_REFUSED (the UAV and event are in
-    ``counters``).
+    ``attempts`` and call again), SUPERVISOR_REFUSED (the UAV and event are in
+    ``counters``) or INVALID_STATE (the next event time is NaN or fits no event, as
+    non-finite inputs make it; nothing was written for it). Every branch tests its own
+    condition, so an index that derives from the state is used only where it is valid.
     """
     n_orders = book.arrival_s.shape[0]
     n_samples = series.delivered.shape[0]
@@ -597,20 +613,24 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
                 and _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop)):
             continue
         t = min(t_other, t_tick)
-        if t > t_stop:
+        if t != t or t_uav != t_uav:
+            return INVALID_STATE
+        if t > t_stop or t == np.inf:
             return DONE
         if t_uav == t:
+            if fleet.mode[uav] != RESERVED and fleet.mode[uav] != OUTBOUND and fleet.mode[uav] != RETURNING:
+                return INVALID_STATE
             if not _uav_event(book, fleet, attempts, counters, params, table, uav, t):
                 return SUPERVISOR_REFUSED
-        elif t_order == t:
+        elif t_order == t and counters[NEXT_ORDER] < n_orders:
             order = counters[NEXT_ORDER]
             counters[NEXT_ORDER] = order + 1
             _enqueue(book, fleet, counters, order)
-        elif t_tick == t:
+        elif t_tick == t and advertising:
             if not _auction(book, fleet, attempts, counters, params, table, rng, t):
                 return SUPERVISOR_REFUSED
             counters[NEXT_TICK] = tick + 1
-        else:
+        elif t_sample == t and counters[NEXT_SAMPLE] < n_samples:
             k = counters[NEXT_SAMPLE]
             series.delivered[k] = counters[N_DELIVERED]
             series.unallocated[k] = counters[QUEUE_LEN]
@@ -620,6 +640,8 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
             series.in_flight[k] = fleet.mode.shape[0] - counters[N_IDLE] - counters[N_LOST] - counters[N_RESERVED]
             series.aborted[k] = counters[N_ABORTED]
             counters[NEXT_SAMPLE] = k + 1
+        else:
+            return INVALID_STATE
         if t_tick != t:
             counters[MAY_BID] = 0  # the state changed: who may bid must be looked at again
             # While advertising is suspended, ticks are not held: the next one is the first

@@ -1,5 +1,7 @@
 """The study's metrics (MODEL.md section 11), vectorised over a run's arrays."""
 
+import math
+
 import numpy as np
 import pandas as pd
 
@@ -41,16 +43,22 @@ def run_metrics(result):
         "aborted_attempts": aborted,
         "aborted_pct": 100.0 * aborted / attempts if attempts else float("nan"),
         "pending": int((~delivered).sum()),
-        "backlog_age_s": float((config.horizon_s - o["arrival_s"][~delivered]).sum()),
+        # math.fsum: correctly rounded, so no summation order (numpy's is SIMD-dependent) matters.
+        "backlog_age_s": math.fsum(config.horizon_s - o["arrival_s"][~delivered]),
         "lost_uavs": int(final["lost"].sum()),
         "auctions": int(result.auctions),
-        "decision_accuracy": float(decision_accuracy(final["coef"], final["intercept"], final["soh"], config).mean()),
+        "decision_accuracy": _mean(decision_accuracy(final["coef"], final["intercept"], final["soh"], config)),
         "reservations_won": int(result.reservations),
         "median_reservation_wait_s": (float(np.median(a["takeoff_s"][reserved] - a["allocated_s"][reserved]))
                                       if reserved.any() else float("nan")),
         "forecast_met_pct": (100.0 * float(np.mean(a["outcome"][turned] == OUTCOME_DELIVERED))
                              if turned.any() else float("nan")),
     }
+
+
+def _mean(values):
+    """Mean of a float array, correctly rounded sum (independent of summation order); nan if empty."""
+    return math.fsum(values) / values.shape[0] if values.shape[0] else float("nan")
 
 
 def by_arrival_week(arrival_s, delivered_s, horizon_s, run=None):
@@ -126,7 +134,13 @@ def decision_accuracy(coef, intercept, soh, config, points=None):
     """
     points = accuracy_points(config) if points is None else np.asarray(points, dtype=np.float64)
     x = standardise(points, np.array(config.scaler_mean), np.array(config.scaler_std))
-    bids = x @ np.asarray(coef).T + np.asarray(intercept) >= 0.0
+    coef, intercept = np.asarray(coef, dtype=np.float64), np.asarray(intercept, dtype=np.float64)
+    # policy.decision's operations in its order, elementwise over (points, UAVs): no BLAS, whose
+    # kernels (and so last bits) depend on the CPU.
+    f = 0.0 + x[:, :1] * coef[:, 0]
+    f += x[:, 1:2] * coef[:, 1]
+    f += x[:, 2:] * coef[:, 2]
+    bids = f + intercept >= 0.0
     truth = capable(points[:, :1], points[:, 1:2], points[:, 2:], drain_per_watt(config.capacity_wh, soh),
                     config_power(config, points[:, 1:2]), config_power(config, 0.0), config.speed_m_s, config.xi)
     return (bids == truth).mean(axis=0)

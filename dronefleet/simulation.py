@@ -61,6 +61,10 @@ class RunResult:
     period: int
 
 
+class InvalidStateError(RuntimeError):
+    """The engine met a state no event fits (non-finite input slipped through validation)."""
+
+
 #: First element of the spawn key of the streams of periods after the first (an unused child).
 PERIOD_STREAMS = 1000
 
@@ -165,7 +169,11 @@ def _attempt_table(capacity, old=None):
 
 
 def advance(state, t_stop):
-    """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed."""
+    """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed.
+
+    Raises SupervisorError if the supervisor refuses an event, InvalidStateError if the state
+    has no valid next event (non-finite inputs).
+    """
     while True:
         status = engine.advance(state.book, state.fleet, state.attempts, state.series, state.counters,
                                 state.params, state.table, state.bid_rng, t_stop)
@@ -174,6 +182,12 @@ def advance(state, t_stop):
         if status == engine.ATTEMPTS_FULL:
             state.attempts = _attempt_table(2 * state.attempts.uav.shape[0], state.attempts)
             continue
+        if status == engine.INVALID_STATE:
+            bad = np.flatnonzero(np.isnan(state.fleet.next_s)).tolist()
+            raise InvalidStateError(
+                "the engine stopped in an invalid state before t = "
+                f"{t_stop:g} s ({'NaN event times of UAV(s) ' + str(bad) if bad else 'no event fits the state'}); "
+                "inputs must be finite (SoH in (0, 1], SoC in [0, 100], finite policies)")
         i = int(state.counters[engine.REFUSED_UAV])
         event = engine.EVENT_NAMES[state.counters[engine.REFUSED_EVENT]]
         raise SupervisorError(

@@ -84,15 +84,15 @@ def _rotl(x, k):
 @njit(cache=True)
 def next_u64(rng, trial, stream):
     """xoshiro256** step of ``rng[trial, stream]`` (uint64[4]); returns uint64."""
-    s = rng[trial, stream]
-    result = _rotl(s[1] * np.uint64(5), 7) * np.uint64(9)
-    t = s[1] << np.uint64(17)
-    s[2] ^= s[0]
-    s[3] ^= s[1]
-    s[1] ^= s[2]
-    s[0] ^= s[3]
-    s[2] ^= t
-    s[3] = _rotl(s[3], 45)
+    s0 = rng[trial, stream, 0]
+    s1 = rng[trial, stream, 1]
+    s2 = rng[trial, stream, 2] ^ s0
+    s3 = rng[trial, stream, 3] ^ s1
+    result = _rotl(s1 * np.uint64(5), 7) * np.uint64(9)
+    rng[trial, stream, 0] = s0 ^ s3
+    rng[trial, stream, 1] = s1 ^ s2
+    rng[trial, stream, 2] = s2 ^ (s1 << np.uint64(17))
+    rng[trial, stream, 3] = _rotl(s3, 45)
     return result
 
 
@@ -104,12 +104,14 @@ def uniform(rng, trial, stream):
 
 @njit(cache=True)
 def normal_pair(rng, trial, stream):
-    """Two independent N(0, 1) draws (Box-Muller with the project's log/cos/sin)."""
-    u1 = 1.0 - uniform(rng, trial, stream)      # (0, 1]: log is finite
-    u2 = uniform(rng, trial, stream)
-    radius = np.sqrt(-2.0 * log(u1))
-    angle = 2.0 * PI * u2
-    return radius * cos(angle), radius * sin(angle)
+    """Two independent N(0, 1) draws (Marsaglia's polar method: one log, no sin/cos)."""
+    while True:
+        u = 2.0 * uniform(rng, trial, stream) - 1.0
+        v = 2.0 * uniform(rng, trial, stream) - 1.0
+        r2 = u * u + v * v
+        if 0.0 < r2 < 1.0:
+            m = np.sqrt(-2.0 * log(r2) / r2)
+            return u * m, v * m
 
 
 # ------------------------------------------------------------------ geometry
@@ -182,7 +184,7 @@ def _ray_hit(sx, sy, ux, uy, cx, cy):
 
 @njit(cache=True)
 def _wall_hit(sx, sy, ux, uy):
-    """Distance along the unit ray (s, u) to the nearest inner wall face."""
+    """Distance along the unit ray (s, u) to the nearest inner wall face (1.0: none)."""
     d = 1.0
     if ux > 0.0:
         d = min(d, (WALL - sx) / ux)
@@ -196,20 +198,28 @@ def _wall_hit(sx, sy, ux, uy):
 
 
 @njit(cache=True)
-def obstacle_vector(tr, i, x, y, ct, st, dist, ray_cos, ray_sin):
-    """o of section 4 for robot i of trial tr, in its own frame [cm/s]."""
-    n = x.shape[1]
+def obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin):
+    """o of section 4 for robot i of trial tr, in its own frame [cm/s].
+
+    Rays reach 0.135 m from the centre, so only walls that close and the
+    ``near_idx[i, :near_n[i]]`` robots (centres closer than RAY_REACH) are
+    tested; a robot with neither reads nothing.
+    """
     ox = 0.0
     oy = 0.0
+    reach = RADIUS + RAY_LENGTH
+    near_wall = abs(x[tr, i]) >= WALL - reach or abs(y[tr, i]) >= WALL - reach
+    if not near_wall and near_n[i] == 0:
+        return 0.0, 0.0
     for k in range(8):
         ux = ct[tr, i] * ray_cos[k] - st[tr, i] * ray_sin[k]
         uy = st[tr, i] * ray_cos[k] + ct[tr, i] * ray_sin[k]
         sx = x[tr, i] + RADIUS * ux
         sy = y[tr, i] + RADIUS * uy
-        d = _wall_hit(sx, sy, ux, uy)
-        for j in range(n):
-            if j != i and dist[i, j] < RAY_REACH:
-                d = min(d, _ray_hit(sx, sy, ux, uy, x[tr, j], y[tr, j]))
+        d = _wall_hit(sx, sy, ux, uy) if near_wall else 1.0
+        for m in range(near_n[i]):
+            j = near_idx[i, m]
+            d = min(d, _ray_hit(sx, sy, ux, uy, x[tr, j], y[tr, j]))
         if d <= RAY_LENGTH:
             weight = (RAY_LENGTH - d) / RAY_LENGTH * V_MAX
             ox -= weight * ray_cos[k]
@@ -426,6 +436,11 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
 
     # --- scratch (per trial, reused every tick)
     dist = np.zeros((n, n))
+    inv_dist = np.zeros((n, n))           # 1 / d, pairs closer than R_RAB
+    ux_pair = np.zeros((n, n))            # unit vector i -> j (world), pairs closer than R_RAB
+    uy_pair = np.zeros((n, n))
+    near_n = np.zeros(n, dtype=np.int64)  # robots a ray of i can reach
+    near_idx = np.zeros((n, n), dtype=np.int64)
     heard = np.zeros(n, dtype=np.bool_)
     rho = np.zeros(n)
     conditions = np.zeros(N_EVENTS, dtype=np.bool_)
@@ -464,6 +479,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     th[tr, i] = _wrap(th[tr, i] + omega * DT)
                     ct[tr, i] = cos(th[tr, i])
                     st[tr, i] = sin(th[tr, i])
+            # pair geometry, shared by neighbours, rays and transfers
+            for i in range(n):
+                near_n[i] = 0
             for i in range(n):
                 dist[i, i] = 0.0
                 for j in range(i + 1, n):
@@ -472,6 +490,19 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     d = np.sqrt(dx * dx + dy * dy)
                     dist[i, j] = d
                     dist[j, i] = d
+                    if d < R_RAB:
+                        inv = 1.0 / d if d > 0.0 else 0.0
+                        ux_pair[i, j] = dx * inv
+                        uy_pair[i, j] = dy * inv
+                        ux_pair[j, i] = -dx * inv
+                        uy_pair[j, i] = -dy * inv
+                        inv_dist[i, j] = inv
+                        inv_dist[j, i] = inv
+                    if d < RAY_REACH:
+                        near_idx[i, near_n[i]] = j
+                        near_n[i] += 1
+                        near_idx[j, near_n[j]] = i
+                        near_n[j] += 1
 
             # 3. work count (working as left by step t - 1, current centre)
             n_t = 0
@@ -511,8 +542,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                 # 2. neighbours (messages one tick old, positions current) and repulsion
                 c = ct[tr, i]
                 s = st[tr, i]
-                rep_x = 0.0
-                rep_y = 0.0
+                # summed in the world frame, rotated into the robot's frame once
+                rep_wx = 0.0
+                rep_wy = 0.0
                 n_heard = 0
                 for j in range(n):
                     heard[j] = False
@@ -522,24 +554,25 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     n_heard += 1
                     r_cm = 100.0 * dist[i, j]
                     if r_cm < 1e-6:
-                        r_cm = 1e-6
-                        away_x = 1.0          # bearing pi: pushed straight ahead
-                        away_y = 0.0
+                        # bearing pi (pushed straight ahead), rho = 1e-6 cm: the cap
+                        rho[j] = 1e-6
+                        rep_wx += LJ_CAP * c
+                        rep_wy += LJ_CAP * s
                     else:
-                        dx = x[tr, j] - x[tr, i]
-                        dy = y[tr, j] - y[tr, i]
-                        away_x = -(dx * c + dy * s) / dist[i, j]
-                        away_y = -(-dx * s + dy * c) / dist[i, j]
-                    rho[j] = r_cm
-                    q = 10.0 / r_cm
-                    q2 = q * q
-                    q4 = q2 * q2
-                    q8 = q4 * q4
-                    magnitude = min(1000.0 / r_cm * (q8 * q8 * q8), LJ_CAP)
-                    rep_x += magnitude * away_x
-                    rep_y += magnitude * away_y
+                        rho[j] = r_cm
+                        # 1000 / rho * (10 / rho)^24 with rho = 100 d
+                        q = 0.1 * inv_dist[i, j]
+                        q2 = q * q
+                        q4 = q2 * q2
+                        q8 = q4 * q4
+                        magnitude = min(10.0 * inv_dist[i, j] * (q8 * q8 * q8), LJ_CAP)
+                        rep_wx -= magnitude * ux_pair[i, j]
+                        rep_wy -= magnitude * uy_pair[i, j]
+                rep_x = 0.0
+                rep_y = 0.0
                 if n_heard > 0:
-                    rep_x, rep_y = _clamp_length(rep_x / n_heard, rep_y / n_heard, V_MAX)
+                    rep_x, rep_y = _clamp_length((rep_wx * c + rep_wy * s) / n_heard,
+                                                 (-rep_wx * s + rep_wy * c) / n_heard, V_MAX)
 
                 low = e_start < low_threshold(x[tr, i])
                 high = e_start >= 0.99 * cap[i]
@@ -659,11 +692,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         if dist[i, p] * 100.0 < 1e-6:
                             att_x = -length
                             att_y = 0.0
-                        else:
-                            dx = x[tr, p] - x[tr, i]
-                            dy = y[tr, p] - y[tr, i]
-                            att_x = length * (dx * c + dy * s) / dist[i, p]
-                            att_y = length * (-dx * s + dy * c) / dist[i, p]
+                        else:       # the provider was heard: closer than R_RAB
+                            att_x = length * (ux_pair[i, p] * c + uy_pair[i, p] * s)
+                            att_y = length * (-ux_pair[i, p] * s + uy_pair[i, p] * c)
                     else:
                         if is_worker:
                             target = 0.55 if (to_work[tr, i] or mobile) else -0.55
@@ -672,7 +703,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         a = min(max(100.0 * (target - x[tr, i]), -V_MAX), V_MAX)
                         att_x = a * c
                         att_y = -a * s
-                    obs_x, obs_y = obstacle_vector(tr, i, x, y, ct, st, dist, ray_cos, ray_sin)
+                    obs_x, obs_y = obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx,
+                                                   ray_cos, ray_sin)
                     fx = att_x + rep_x + obs_x
                     fy = att_y + rep_y + obs_y
                     if np.sqrt(fx * fx + fy * fy) > 0.5:

@@ -61,6 +61,10 @@ SHARE_CM = 14.0          # cm
 RAY_LENGTH = 0.1         # m
 WALL = 0.8               # inner wall faces [m]
 SAFE = 0.765             # position clamp [m]
+# Pairs with d^2 above this are out of range of everything (R_RAB is the largest reach);
+# the margin keeps the exact test sqrt(d^2) < R_RAB for those below.
+RANGE2_FILTER = R_RAB * R_RAB * (1.0 + 1e-9)
+FAR = 1e3                # distance recorded for pairs beyond RANGE2_FILTER [m]
 # A ray (0.035 + 0.1 m from the centre) can only reach discs whose centre is this close.
 RAY_REACH = RADIUS + RAY_LENGTH + RADIUS
 # LJ magnitude cap: (10 / rho)^24 overflows to inf for overlapping discs, and an
@@ -81,7 +85,7 @@ def _rotl(x, k):
     return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def next_u64(rng, trial, stream):
     """xoshiro256** step of ``rng[trial, stream]`` (uint64[4]); returns uint64."""
     s0 = rng[trial, stream, 0]
@@ -96,13 +100,13 @@ def next_u64(rng, trial, stream):
     return result
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def uniform(rng, trial, stream):
     """Uniform double in [0, 1) with 53 random bits."""
     return np.float64(next_u64(rng, trial, stream) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def normal_pair(rng, trial, stream):
     """Two independent N(0, 1) draws (Marsaglia's polar method: one log, no sin/cos)."""
     while True:
@@ -197,7 +201,7 @@ def _wall_hit(sx, sy, ux, uy):
     return max(d, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin):
     """o of section 4 for robot i of trial tr, in its own frame [cm/s].
 
@@ -263,7 +267,7 @@ def wheels_from_force(fx, fy, mode):
 # ------------------------------------------------------------------ supervisor VM
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def apply_uncontrollable(tables, n_sup, role, states, unc_order, n_unc, conditions):
     """Apply each true uncontrollable event in the file's order (section 5.1, step 2).
 
@@ -279,7 +283,7 @@ def apply_uncontrollable(tables, n_sup, role, states, unc_order, n_unc, conditio
                     states[k] = target
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def choose_controllable(tables, n_sup, role, states, ctrl_order, n_ctrl, enabled, rng, tr):
     """The controllable event enabled in every supervisor (uniform pick among several), or -1.
 
@@ -441,6 +445,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     uy_pair = np.zeros((n, n))
     near_n = np.zeros(n, dtype=np.int64)  # robots a ray of i can reach
     near_idx = np.zeros((n, n), dtype=np.int64)
+    range_n = np.zeros(n, dtype=np.int64)  # robots closer than R_RAB, ascending index
+    range_idx = np.zeros((n, n), dtype=np.int64)
     heard = np.zeros(n, dtype=np.bool_)
     rho = np.zeros(n)
     conditions = np.zeros(N_EVENTS, dtype=np.bool_)
@@ -482,15 +488,25 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             # pair geometry, shared by neighbours, rays and transfers
             for i in range(n):
                 near_n[i] = 0
+                range_n[i] = 0
             for i in range(n):
                 dist[i, i] = 0.0
                 for j in range(i + 1, n):
                     dx = x[tr, j] - x[tr, i]
                     dy = y[tr, j] - y[tr, i]
-                    d = np.sqrt(dx * dx + dy * dy)
+                    d2 = dx * dx + dy * dy
+                    if d2 > RANGE2_FILTER:
+                        dist[i, j] = FAR
+                        dist[j, i] = FAR
+                        continue
+                    d = np.sqrt(d2)
                     dist[i, j] = d
                     dist[j, i] = d
                     if d < R_RAB:
+                        range_idx[i, range_n[i]] = j
+                        range_n[i] += 1
+                        range_idx[j, range_n[j]] = i
+                        range_n[j] += 1
                         inv = 1.0 / d if d > 0.0 else 0.0
                         ux_pair[i, j] = dx * inv
                         uy_pair[i, j] = dy * inv
@@ -548,7 +564,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                 n_heard = 0
                 for j in range(n):
                     heard[j] = False
-                    if j == i or dist[i, j] >= R_RAB or msg_state[cur, tr, j] == MSG_NONE:
+                for m in range(range_n[i]):        # ascending robot index
+                    j = range_idx[i, m]
+                    if msg_state[cur, tr, j] == MSG_NONE:
                         continue
                     heard[j] = True
                     n_heard += 1

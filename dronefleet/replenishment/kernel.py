@@ -187,18 +187,13 @@ def _ray_hit(sx, sy, ux, uy, cx, cy):
 
 
 @njit(cache=True)
-def _wall_hit(sx, sy, ux, uy):
-    """Distance along the unit ray (s, u) to the nearest inner wall face (1.0: none)."""
-    d = 1.0
-    if ux > 0.0:
-        d = min(d, (WALL - sx) / ux)
-    elif ux < 0.0:
-        d = min(d, (-WALL - sx) / ux)
-    if uy > 0.0:
-        d = min(d, (WALL - sy) / uy)
-    elif uy < 0.0:
-        d = min(d, (-WALL - sy) / uy)
-    return max(d, 0.0)
+def _wall_hit(s, u):
+    """Distance along the unit ray (s, u) (one axis) to the inner wall face it heads for."""
+    if u > 0.0:
+        return max((WALL - s) / u, 0.0)
+    if u < 0.0:
+        return max((-WALL - s) / u, 0.0)
+    return 1.0
 
 
 @njit(cache=True, inline='always')
@@ -212,15 +207,20 @@ def obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin):
     ox = 0.0
     oy = 0.0
     reach = RADIUS + RAY_LENGTH
-    near_wall = abs(x[tr, i]) >= WALL - reach or abs(y[tr, i]) >= WALL - reach
-    if not near_wall and near_n[i] == 0:
+    near_x_wall = abs(x[tr, i]) >= WALL - reach
+    near_y_wall = abs(y[tr, i]) >= WALL - reach
+    if not near_x_wall and not near_y_wall and near_n[i] == 0:
         return 0.0, 0.0
     for k in range(8):
         ux = ct[tr, i] * ray_cos[k] - st[tr, i] * ray_sin[k]
         uy = st[tr, i] * ray_cos[k] + ct[tr, i] * ray_sin[k]
         sx = x[tr, i] + RADIUS * ux
         sy = y[tr, i] + RADIUS * uy
-        d = _wall_hit(sx, sy, ux, uy) if near_wall else 1.0
+        d = 1.0
+        if near_x_wall:
+            d = _wall_hit(sx, ux)
+        if near_y_wall:
+            d = min(d, _wall_hit(sy, uy))
         for m in range(near_n[i]):
             j = near_idx[i, m]
             d = min(d, _ray_hit(sx, sy, ux, uy, x[tr, j], y[tr, j]))

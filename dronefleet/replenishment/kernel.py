@@ -273,14 +273,18 @@ def apply_uncontrollable(tables, n_sup, role, states, unc_order, n_unc, conditio
 
     Every supervisor with a transition for it moves; one without stays
     (``tables[role, k, s, e] == -1``). ``states`` (K,) is updated in place.
+    Returns whether any local state changed.
     """
+    changed = False
     for idx in range(n_unc[role]):
         ev = unc_order[role, idx]
         if conditions[ev]:
             for k in range(n_sup[role]):
                 target = tables[role, k, states[k], ev]
-                if target >= 0:
+                if target >= 0 and target != states[k]:
                     states[k] = target
+                    changed = True
+    return changed
 
 
 @njit(cache=True, inline='always')
@@ -404,6 +408,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     served = np.full((n_trials, n), -1, dtype=np.int64)     # MC: `to`
     phase = np.zeros((n_trials, n), dtype=np.int64)
     sup = np.zeros((n_trials, n, kmax), dtype=np.int64)
+    vm_still = np.zeros((n_trials, n), dtype=np.bool_)    # last VM step changed nothing
+    vm_mask = np.zeros((n_trials, n), dtype=np.int64)     # ... under these conditions
     # messages, double-buffered: [tick parity, trial, robot]
     msg_state = np.zeros((2, n_trials, n), dtype=np.int64)
     msg_req = np.zeros((2, n_trials, n), dtype=np.bool_)
@@ -656,16 +662,24 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     conditions[EV_NOT_AT_CHARGER] = not at_charger
                     conditions[EV_LOW] = low
                     conditions[EV_HIGH] = high
-                    states = sup[tr, i]
-                    apply_uncontrollable(tables, n_sup, role, states, unc_order, n_unc, conditions)
-                    if trace:
-                        for k in range(kmax):
-                            tr_sup[tr, t - 1, i, k] = states[k]
-                    event = choose_controllable(tables, n_sup, role, states, ctrl_order, n_ctrl,
-                                                enabled, rng, tr)
+                    # The VM step is a function of (states, conditions): after a step that
+                    # changed no state and took no event, it is skipped while the
+                    # conditions repeat (it would again do nothing).
+                    mask = at_work + 2 * at_charger + 4 * low + 8 * high
+                    if not (vm_still[tr, i] and vm_mask[tr, i] == mask):
+                        states = sup[tr, i]
+                        changed = apply_uncontrollable(tables, n_sup, role, states, unc_order,
+                                                       n_unc, conditions)
+                        if trace:
+                            for k in range(kmax):
+                                tr_sup[tr, t - 1, i, k] = states[k]
+                        event = choose_controllable(tables, n_sup, role, states, ctrl_order,
+                                                    n_ctrl, enabled, rng, tr)
+                        vm_still[tr, i] = not changed and event < 0
+                        vm_mask[tr, i] = mask
                     if event >= 0:
                         for k in range(n_sup[role]):
-                            states[k] = tables[role, k, states[k], event]
+                            sup[tr, i, k] = tables[role, k, sup[tr, i, k], event]
                         # actions (section 5.3)
                         if event == EV_MOVE_TO_WORK:
                             to_work[tr, i] = True

@@ -341,3 +341,25 @@ def test_summary_metrics_are_the_spec_ratios(mobile_run):
                                result["battery"].sum(axis=1), rtol=1e-12)
     phases = result["series"][:, :, :8].sum(axis=2)
     assert np.all(phases == params.n_workers + params.n_chargers)
+
+
+def test_only_the_last_charger_in_id_string_order_transfers_and_only_within_14_cm():
+    # worker 0, chargers 1..11 (C1..C11); C2 (index 2) and C10 (index 10) both name it
+    n_chargers = 11
+    n = 1 + n_chargers
+    sharing = np.zeros((1, n), dtype=np.bool_)
+    served = np.full((1, n), -1, dtype=np.int64)
+    dist = np.full((n, n), 0.10)
+    sharing[0, [2, 10]] = True
+    served[0, [2, 10]] = 0
+    rank = _mc_rank(n_chargers)
+    # "C10" < "C2": C2 is the last, and it transfers
+    assert K.transfer_source(0, 0, 1, sharing, served, rank, dist) == 2
+    dist[0, 2] = dist[2, 0] = 0.1399
+    assert K.transfer_source(0, 0, 1, sharing, served, rank, dist) == 2
+    # C2 too far: nobody transfers (C10 is not the last, so it does not step in)
+    dist[0, 2] = dist[2, 0] = 0.1401
+    assert K.transfer_source(0, 0, 1, sharing, served, rank, dist) == -1
+    # C2 not sharing: C10 is the only one
+    sharing[0, 2] = False
+    assert K.transfer_source(0, 0, 1, sharing, served, rank, dist) == 10

@@ -313,6 +313,28 @@ def choose_controllable(tables, n_sup, role, states, ctrl_order, n_ctrl, enabled
     return enabled[pick]
 
 
+# ------------------------------------------------------------------ energy
+
+
+@njit(cache=True, inline='always')
+def transfer_source(tr, i, nw, sharing, served, mc_rank, dist):
+    """The MC that transfers to charging worker i this tick, or -1 (section 7, step 6).
+
+    Among the MCs sharing with ``to == i`` only the last in id-string order
+    (highest ``mc_rank``) may transfer, and only if its centre is closer than
+    14 cm to the worker's.
+    """
+    source = -1
+    best_rank = -1
+    for j in range(nw, sharing.shape[1]):
+        if sharing[tr, j] and served[tr, j] == i and mc_rank[j - nw] > best_rank:
+            source = j
+            best_rank = mc_rank[j - nw]
+    if source >= 0 and 100.0 * dist[i, source] < SHARE_CM:
+        return source
+    return -1
+
+
 # ------------------------------------------------------------------ the kernel
 
 
@@ -793,13 +815,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     depleted[tr, i] = True
                 energy[tr, i] = e
                 if charging[tr, i]:
-                    source = -1
-                    best_rank = -1
-                    for j in range(nw, n):
-                        if sharing[tr, j] and served[tr, j] == i and mc_rank[j - nw] > best_rank:
-                            source = j
-                            best_rank = mc_rank[j - nw]
-                    if source >= 0 and 100.0 * dist[i, source] < SHARE_CM:
+                    source = transfer_source(tr, i, nw, sharing, served, mc_rank, dist)
+                    if source >= 0:
                         delta = v_charge * (1.0 - loss)
                         excess = max(e + delta - cap[i], 0.0)
                         e1 = min(e + delta, cap[i])

@@ -92,3 +92,9 @@ def test_the_most_robots_that_fit_are_accepted():
 def test_derived_rates():
     p = Params(work_ratio=2.5, charge_rate=0.5, charger_capacity_factor=1.5)
     assert (p.v_work, p.v_charge, p.charger_capacity) == (0.25, 0.5, 150.0)
+
+
+def test_a_trace_too_large_for_memory_is_refused_before_running():
+    from dronefleet.replenishment import simulate
+    with pytest.raises(ValueError, match="GB"):
+        simulate(Params(ticks=6000, trials=10_000), trace=True)

@@ -25,6 +25,7 @@ SUPERVISOR_FILES = {
 }
 TRIAL_SEED_FACTOR = 876     # trial k (1-based) uses seed 876 k
 
+TRACE_MAX_BYTES = 2e9      # the trace is for tests and inspection, not for sweeps
 TRACE_NAMES = ("x", "y", "energy", "consumed", "flags", "event", "sup_states", "provider",
                "served", "msg_requesting", "msg_from", "msg_to", "received", "source")
 
@@ -134,6 +135,12 @@ def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
     trials = params.trials if trials is None else int(trials)
     if trials < 1 or first_trial < 1:
         raise ValueError(f"trials = {trials}, first_trial = {first_trial}: both must be >= 1")
+    n_robots = params.n_workers + params.n_chargers
+    trace_bytes = trials * params.ticks * n_robots * 8 * (len(TRACE_NAMES) + 4)
+    if trace and trace_bytes > TRACE_MAX_BYTES:
+        raise ValueError(f"trace of {trials} trials x {params.ticks} ticks x {n_robots} robots "
+                         f"needs {trace_bytes / 1e9:.1f} GB; at most {TRACE_MAX_BYTES / 1e9:g} GB "
+                         f"is allowed: trace fewer trials or ticks")
     supervisors = dict(supervisors or {})
     worker_file = "worker-with-mobile-charger" if params.mobile else "worker"
     worker = supervisors.get("worker") or load_supervisor(SUPERVISOR_FILES[worker_file])

@@ -98,3 +98,9 @@ def test_a_trace_too_large_for_memory_is_refused_before_running():
     from dronefleet.replenishment import simulate
     with pytest.raises(ValueError, match="GB"):
         simulate(Params(ticks=6000, trials=10_000), trace=True)
+
+
+def test_simulate_validates_before_any_work():
+    from dronefleet.replenishment import simulate
+    with pytest.raises(ParamsError, match="transfer_loss"):
+        simulate(Params(strategy="mobile", n_chargers=2, transfer_loss=1.5))

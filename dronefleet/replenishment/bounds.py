@@ -1,0 +1,96 @@
+"""Analytic upper bounds of work and efficiency (REPLENISHMENT.md section 9).
+
+The paper's Eqs 1-3 in per-tick units: a fixed-charger bound (workers commute
+1.0 m each way at full speed) and a constant-supply bound for the mobile
+strategy (no commute; charging at (1 - lambda) v_charge). They are per worker
+and do not depend on n_m or phi. Each function refuses parameters where its
+bound does not exist (a worker that cannot gain energy while charging, or
+cannot afford the commute) with :class:`BoundUndefinedError`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..config import ConfigError
+from .params import V_MIN, V_MOVE, V_MAX_CM_S, Params
+
+__all__ = ["BoundUndefinedError", "Bounds", "COMMUTE_TICKS", "fixed_bounds",
+           "constant_supply_bounds", "bounds"]
+
+# D_c: 1.0 m (x = -0.5 to 0.5) at v_max = 0.012 m/tick.
+COMMUTE_TICKS = 1.0 / (V_MAX_CM_S / 100.0 * 0.1)
+
+
+class BoundUndefinedError(ConfigError):
+    """The analytic bound does not exist for these parameters."""
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Upper bounds for one configuration (work in points, efficiency a ratio).
+
+    ``duty`` is D_work / D_cycle (fixed) or D_work,cs / (D_work,cs + D_charge,cs).
+    """
+
+    work: float
+    efficiency: float
+    duty: float
+
+
+def fixed_bounds(params: Params) -> Bounds:
+    """W_fix and E_fix (Eqs 1-3) for fixed chargers in the base.
+
+    Raises
+    ------
+    BoundUndefinedError
+        If v_charge <= v_min (charging never fills) or c_w <= 2 (v_min + v_move) D_c
+        (a full battery cannot pay for the round trip).
+    """
+    c_w, v_charge, v_work = params.worker_capacity, params.v_charge, params.v_work
+    if v_charge <= V_MIN:
+        raise BoundUndefinedError(
+            f"no fixed-charger bound for charge_rate = {params.charge_rate!r}: "
+            f"v_charge = {v_charge:g} must exceed v_min = {V_MIN:g}", ("charge_rate",))
+    commute_cost = 2.0 * (V_MIN + V_MOVE) * COMMUTE_TICKS
+    if c_w <= commute_cost:
+        raise BoundUndefinedError(
+            f"no fixed-charger bound for worker_capacity = {c_w!r}: it must exceed the "
+            f"round-trip cost 2 (v_min + v_move) D_c = {commute_cost:g}", ("worker_capacity",))
+    d_charge = c_w / (v_charge - V_MIN)
+    d_work = (c_w - commute_cost) / (V_MIN + v_work)
+    d_cycle = d_work + 2.0 * COMMUTE_TICKS + d_charge
+    duty = d_work / d_cycle
+    work = params.n_workers * duty * params.ticks
+    efficiency = 1.0 - d_cycle * V_MIN / c_w - 2.0 * COMMUTE_TICKS * V_MOVE / c_w
+    return Bounds(work=work, efficiency=efficiency, duty=duty)
+
+
+def constant_supply_bounds(params: Params) -> Bounds:
+    """W_cs and E_cs: Eq 1 with D_c = 0 and charging at (1 - lambda) v_charge.
+
+    E_cs counts the transfer loss as Fig 12 does (work energy / (total + lost)).
+
+    Raises
+    ------
+    BoundUndefinedError
+        If (1 - lambda) v_charge <= v_min (a worker never fills).
+    """
+    c_w, lam = params.worker_capacity, params.transfer_loss
+    received = (1.0 - lam) * params.v_charge
+    if received <= V_MIN:
+        raise BoundUndefinedError(
+            f"no constant-supply bound for charge_rate = {params.charge_rate!r}, "
+            f"transfer_loss = {lam!r}: (1 - lambda) v_charge = {received:g} must exceed "
+            f"v_min = {V_MIN:g}", ("charge_rate", "transfer_loss"))
+    d_charge = c_w / (received - V_MIN)
+    d_work = c_w / (V_MIN + params.v_work)
+    duty = d_work / (d_work + d_charge)
+    work = params.n_workers * params.ticks * duty
+    efficiency = 1.0 - (V_MIN * (d_work + d_charge) + lam * params.v_charge * d_charge) / c_w
+    return Bounds(work=work, efficiency=efficiency, duty=duty)
+
+
+def bounds(params: Params) -> Bounds:
+    """The bound that is the reference for ``params.strategy``."""
+    return constant_supply_bounds(params) if params.mobile else fixed_bounds(params)

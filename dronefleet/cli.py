@@ -103,10 +103,13 @@ def build_parser():
 
 
 def _at_least(least):
-    """argparse type: an integer >= ``least``."""
+    """argparse type: an integer >= ``least``, in ASCII digits."""
     def integer(text):
-        if not text.isdigit() or int(text) < least:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {least}, got {text!r}")
+        # isdigit() alone takes '²' and other Unicode digits, which int() refuses; a number of
+        # thousands of digits is refused by int() too, and is no count or task anyway
+        if not (text.isascii() and text.isdigit() and len(text) < 19) or int(text) < least:
+            shown = repr(text) if len(text) <= 40 else f"{text[:40]!r}... ({len(text)} characters)"
+            raise argparse.ArgumentTypeError(f"expected an integer >= {least} (at most 18 digits), got {shown}")
         return int(text)
     return integer
 

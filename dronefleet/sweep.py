@@ -73,8 +73,10 @@ _SECTIONS = ("sweep", "set", "grid")
 _SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task")
 _SEED_RANGE_KEYS = ("start", "count")
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
-#: A Dask scheduler address: protocol://host:port, host a name, an IPv4 or a bracketed IPv6 address.
-_SCHEDULER = re.compile(r"(?:tcp|tls|ucx|ws|wss)://(?:[A-Za-z0-9](?:[A-Za-z0-9.-]*[A-Za-z0-9])?|\[[0-9A-Fa-f:.]+\])"
+#: A Dask scheduler address: [protocol://]host:port (Dask's default protocol is tcp), host a
+#: name, an IPv4 or a bracketed IPv6 address.
+_LABEL = r"[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?"   # of a host name: 1-63 characters
+_SCHEDULER = re.compile(rf"(?:(?:tcp|tls|ucx|ws|wss)://)?(?P<host>{_LABEL}(?:\.{_LABEL})*|\[[0-9A-Fa-f:.]+\])"
                         r":(?P<port>[0-9]{1,5})")
 
 
@@ -376,16 +378,17 @@ def state(run: Run, out: Path) -> str:
 
 
 def check_scheduler(address: str) -> str:
-    """``address`` if it is a Dask scheduler address ``protocol://host:port``; SweepError otherwise.
+    """``address`` if it is a Dask scheduler address ``[protocol://]host:port``; SweepError otherwise.
 
     Checked before anything runs: Dask's own parser fails with a traceback, or only after a
     connection attempt.
     """
     match = _SCHEDULER.fullmatch(address)
-    if match is None or not 1 <= int(match["port"]) <= 65535:
+    if match is None or len(match["host"]) > 253 or not 1 <= int(match["port"]) <= 65535:
         shown = repr(address) if len(address) <= 80 else f"{address[:80]!r}... ({len(address)} characters)"
-        raise SweepError(f"--scheduler {shown} is not a Dask scheduler address: expected protocol://host:port, "
-                         "protocol tcp, tls, ucx, ws or wss, port 1-65535 (e.g. tcp://10.0.0.1:8786)")
+        raise SweepError(f"--scheduler {shown} is not a Dask scheduler address: expected [protocol://]host:port, "
+                         "protocol tcp (the default), tls, ucx, ws or wss, host a name (at most 253 "
+                         "characters) or an IP address, port 1-65535 (e.g. tcp://10.0.0.1:8786)")
     return address
 
 

@@ -397,7 +397,7 @@ def command(args):
         for line in differences:
             print(f"  differs: {line}")
         print(f"reproduce {args.figure} --check: "
-              f"{f'{len(differences)} values differ' if differences else 'every value identical'} "
+              f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
               f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
     reproduce(figures, args.results, args.quick, args.jobs, args.redraw)

@@ -200,10 +200,13 @@ def build_parser(reproduce_arguments=True):
 
 
 def _at_least(least):
-    """argparse type: an integer >= ``least``."""
+    """argparse type: an integer >= ``least``, in ASCII digits."""
     def integer(text):
-        if not text.isdigit() or int(text) < least:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {least}, got {text!r}")
+        # isdigit() alone takes '²' and other Unicode digits, which int() refuses; a number of
+        # thousands of digits is refused by int() too, and is no count or task anyway
+        if not (text.isascii() and text.isdigit() and len(text) < 19) or int(text) < least:
+            shown = repr(text) if len(text) <= 40 else f"{text[:40]!r}... ({len(text)} characters)"
+            raise argparse.ArgumentTypeError(f"expected an integer >= {least} (at most 18 digits), got {shown}")
         return int(text)
     return integer
 
@@ -255,6 +258,9 @@ def _add_reproduce_command(commands, arguments):
     p.add_argument("--jobs", type=_at_least(1), metavar="J", help="local processes for the sweeps (default: all CPUs)")
     p.add_argument("--results", default="results", metavar="DIR", help="results root (default: results)")
     p.add_argument("--redraw", action="store_true", help="only redraw the PNGs from the figure's parquet tables")
+    p.add_argument("--check", action="store_true",
+                   help="re-run a few of the figure's runs (seconds) and compare them with its runs.parquet; "
+                        "exit 1 and list the differences if any")
     p.set_defaults(func=reproduce.command)
 
 

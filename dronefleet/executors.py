@@ -7,12 +7,26 @@ failure of one item never stops the others. ``function`` and the items must pick
 module-level function or a ``functools.partial`` of one): they travel to other processes.
 """
 
+import ctypes
 import multiprocessing
+import os
+import signal
+import sys
+import threading
+import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
 from .sweep import SweepError
+
+#: ``prctl`` option: the signal the kernel sends this process when its parent dies (linux/prctl.h).
+_PR_SET_PDEATHSIG = 1
+#: How often a worker without ``prctl`` looks whether its parent is still there (s).
+_PARENT_POLL_S = 1.0
+
+#: How long `dask` waits for the scheduler to answer before giving up (s).
+SCHEDULER_TIMEOUT_S = 10.0
 
 
 def _outcome(future):
@@ -27,6 +41,30 @@ def _outcome(future):
         return None, error
 
 
+def _die_with_parent(parent):
+    """Worker initializer: end this worker when the process ``parent`` (its pid) that started it dies.
+
+    A worker would otherwise outlive a sweep killed with SIGKILL (which no handler sees) and
+    go on running its run; the multiprocessing resource tracker, which the workers keep
+    alive by holding its pipe, then lives on too. Linux: the kernel sends SIGKILL at the
+    parent's death (``prctl(PR_SET_PDEATHSIG)``); elsewhere a daemon thread polls the parent
+    pid. A run killed in the middle leaves at most a hidden temporary file, as any kill does.
+    """
+    if sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0:
+            if os.getppid() != parent:  # died before the prctl: no signal will come
+                os._exit(1)
+            return
+    threading.Thread(target=_watch_parent, args=(parent,), daemon=True, name="watch-parent").start()
+
+
+def _watch_parent(parent):
+    while os.getppid() == parent:  # once the parent dies, the worker is adopted: its ppid changes
+        time.sleep(_PARENT_POLL_S)
+    os._exit(1)
+
+
 def local(function, items, jobs):
     """``function`` over ``items`` on ``jobs`` processes of this machine.
 
@@ -39,7 +77,8 @@ def local(function, items, jobs):
     Each worker is a pool of its own that holds one item at a time. A process pool whose
     worker dies (killed, out of memory, segfault) fails every item it holds with
     ``BrokenProcessPool``; holding one, it names the item that killed it exactly, and only
-    that worker is replaced, so the other items run on unaffected.
+    that worker is replaced, so the other items run on unaffected. Workers end when this
+    process dies, even by SIGKILL (see :func:`_die_with_parent`).
     """
     items = deque(items)
     if not items:
@@ -51,6 +90,10 @@ def local(function, items, jobs):
             yield item, function(item), None
         return
     context = multiprocessing.get_context("spawn")
+
+    def worker_pool():
+        return ProcessPoolExecutor(1, mp_context=context, initializer=_die_with_parent, initargs=(os.getpid(),))
+
     holding = {}  # future -> (its pool, its item)
 
     def submit(pool):
@@ -59,7 +102,7 @@ def local(function, items, jobs):
 
     try:
         for _ in range(min(jobs, len(items))):
-            submit(ProcessPoolExecutor(1, mp_context=context))
+            submit(worker_pool())
         while holding:
             finished, _ = wait(holding, return_when=FIRST_COMPLETED)
             for future in finished:
@@ -67,7 +110,7 @@ def local(function, items, jobs):
                 result, error = _outcome(future)
                 if isinstance(error, BrokenProcessPool):  # its worker died: a new one takes its place
                     pool.shutdown()
-                    pool = ProcessPoolExecutor(1, mp_context=context)  # starts no process until a submit
+                    pool = worker_pool()  # starts no process until a submit
                 if items:
                     submit(pool)  # before the yield: the worker does not wait for the caller
                 else:
@@ -81,21 +124,30 @@ def local(function, items, jobs):
 def dask(function, items, scheduler, keys):
     """``function`` over ``items`` on the Dask cluster at ``scheduler``, one task per item.
 
+    Connects at once (within :data:`SCHEDULER_TIMEOUT_S`), so that a scheduler that cannot
+    be reached is a SweepError before anything runs, then returns the generator of outcomes.
     ``keys`` names the tasks (one per item, as shown on the Dask dashboard). Dask
     distributed is an optional dependency: ``pip install 'dronefleet[dask]'``. A task
     whose workers keep dying is given up by the scheduler (``KilledWorker``, after
     ``distributed.scheduler.allowed-failures`` deaths), and is then that item's error.
     """
     try:
-        from distributed import Client, as_completed as dask_completed
+        from distributed import Client
     except ImportError:
         raise SweepError("--executor dask needs Dask distributed: pip install 'dronefleet[dask]'") from None
-    keys, items = list(keys), list(items)
-    item_of = dict(zip(keys, items))
     try:
-        client = Client(scheduler)
-    except OSError as error:
-        raise SweepError(f"cannot reach the Dask scheduler at {scheduler}: {error}") from None
+        client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+    except (OSError, ValueError) as error:  # refused, timed out (TimeoutError is an OSError), unresolvable
+        reason = " ".join(str(error).split()) or type(error).__name__  # one line
+        raise SweepError(f"cannot reach the Dask scheduler at {scheduler} within {SCHEDULER_TIMEOUT_S:g} s: "
+                         f"{reason}") from None
+    return _dask_outcomes(client, function, list(items), list(keys))
+
+
+def _dask_outcomes(client, function, items, keys):
+    from distributed import as_completed as dask_completed
+
+    item_of = dict(zip(keys, items))
     with client:
         # No reference to a future outlives its turn here: Dask then forgets the finished
         # tasks, rather than run them again should the worker that holds their result die.

@@ -18,6 +18,13 @@ or a SLURM job array can fill it beforehand). Each figure then writes its tidy t
 to ``<results>/<figure>/*.parquet`` and draws its PNGs from those files alone, so
 ``--redraw`` redraws without simulating or reading a sweep. ``--quick`` writes under
 ``<results>/quick/``.
+
+Every figure also writes ``<results>/<figure>/runs.parquet``: one row per run it is drawn
+from, with its sweep, its run id (``rule=random,tau_minutes=25.0,seed=3``), its grid values
+and seed and its whole ``summary``. ``--check`` re-runs a few of those runs
+(:data:`CHECK_RUNS`) in a temporary directory, in this process, and compares every value
+of their summaries with the table: the committed numbers re-derive exactly, or the
+command lists what differs (exit 1). It writes nothing under ``<results>``.
 """
 
 import os
@@ -44,6 +51,22 @@ QUICK_SEEDS = (0, 1)
 QUICK_CHANGES = {"horizon_weeks": 2.0}
 #: Where Figures 17, 18 and 20 take the least_confident fleets from.
 LEARNING_TAU = 15.0
+#: The runs `--check` re-runs for each figure, as (sweep, run id), spread over the grid and
+#: the seeds. Those of seeds 0-1 are in --quick's tables too; the others are skipped there.
+CHECK_RUNS = {
+    "fig16": (("rules", "rule=least_confident,tau_minutes=15.0,seed=0"),
+              ("rules", "rule=random,tau_minutes=25.0,seed=3"),
+              ("rules", "rule=most_confident,tau_minutes=40.0,seed=7")),
+    "fig17": (("rules", "rule=most_confident,tau_minutes=15.0,seed=1"),
+              ("rules", "rule=random,tau_minutes=15.0,seed=12")),
+    "fig18": (("rules", "rule=least_confident,tau_minutes=15.0,seed=0"),
+              ("rules", "rule=least_confident,tau_minutes=15.0,seed=19")),
+    "fig19": (("thresholds", "tau_minutes=15.0,theta=70.0,seed=0"),
+              ("thresholds", "tau_minutes=40.0,theta=100.0,seed=5"),
+              ("rules", "rule=least_confident,tau_minutes=30.0,seed=1")),
+    "fig20": (("reservations", "rule=reservation,seed=0"),
+              ("reservations", "rule=least_confident,seed=4")),
+}
 
 
 def sweeps_dir():
@@ -111,6 +134,13 @@ class Study:
                              f"{sweep.path} --results {self.root}):\n{lines}")
         self._ensured.add(name)
 
+    def ensure_runs(self, name, runs):
+        """Run those of ``runs`` (of sweep ``name``) that are not done; raise if any failed."""
+        _, failures = run_sweep(self.sweep(name), self.out(name), runs, self.jobs)
+        if failures:
+            lines = "; ".join(f"{run.partition}: {error}" for run, error in failures.items())
+            raise SweepError(f"sweep {name}: {len(failures)} runs failed: {lines}")
+
     def table(self, name, table, **where):
         """Table ``table`` of sweep ``name`` as pandas, with typed grid columns, filtered on ``where``."""
         import pyarrow.compute as pc
@@ -139,6 +169,24 @@ def _write_parquet(frame, path):
     return path
 
 
+def _write_runs(study, figure, *selections):
+    """``<figure>/runs.parquet``: one row per run the figure is drawn from, for `--check`.
+
+    ``selections`` are ``(sweep, {grid key: value})``: the runs of the sweep that match.
+    Columns ``sweep``, ``run`` (the run id), then the runs' ``summary`` table with its
+    partition columns (grid keys, seed; a key of another sweep is null).
+    """
+    frames = []
+    for name, where in selections:
+        runs = study.sweep(name).runs
+        keys = list(runs[0].keys)
+        run_id = {tuple(getattr(run.config, key) for key in keys): run.id for run in runs}
+        summary = study.table(name, "summary", **where)
+        ids = [run_id[point] for point in summary[keys].itertuples(index=False, name=None)]
+        frames.append(pd.concat([pd.DataFrame({"sweep": name, "run": ids}), summary], axis=1))
+    _write_parquet(pd.concat(frames, ignore_index=True), study.figure_dir(figure) / "runs.parquet")
+
+
 def _read(study, figure, name):
     path = study.root / figure / f"{name}.parquet"
     if not path.exists():
@@ -159,6 +207,7 @@ def _draw(draw, table, path, title):
 
 def tidy_fig16(study):
     d = study.figure_dir("fig16")
+    _write_runs(study, "fig16", ("rules", {}))
     _write_parquet(analysis.run_outcomes(study.table("rules", "summary")), d / "outcomes.parquet")
     orders = study.table("rules", "orders")
     _write_parquet(analysis.backlog_by_arrival_week(orders, study.horizon_s("rules")), d / "backlog.parquet")
@@ -181,6 +230,7 @@ def draw_fig16(study, label="Figure 16", figure="fig16"):
 
 
 def tidy_fig17(study):
+    _write_runs(study, "fig17", ("rules", {"tau_minutes": LEARNING_TAU}))
     fleet = study.table("rules", "fleet", tau_minutes=LEARNING_TAU)
     _write_parquet(analysis.weekly_accuracy(fleet), study.figure_dir("fig17") / "accuracy.parquet")
 
@@ -194,6 +244,7 @@ def draw_fig17(study):
 
 
 def tidy_fig18(study):
+    _write_runs(study, "fig18", ("rules", {"rule": "least_confident", "tau_minutes": LEARNING_TAU}))
     fleet = study.table("rules", "fleet", rule="least_confident", tau_minutes=LEARNING_TAU)
     final = fleet[fleet.week == fleet.week.max()]
     config = study.sweep("rules").runs[0].config
@@ -210,6 +261,7 @@ def draw_fig18(study):
 
 def tidy_fig19(study):
     d = study.figure_dir("fig19")
+    _write_runs(study, "fig19", ("thresholds", {}), ("rules", {"rule": "least_confident"}))
     by = ("theta", "tau_minutes")
     thresholds = analysis.run_outcomes(study.table("thresholds", "summary"), by=by)
     table, best = analysis.threshold_table(thresholds)
@@ -238,6 +290,7 @@ def draw_fig19(study):
 
 
 def tidy_fig20(study):
+    _write_runs(study, "fig20", ("reservations", {}))
     orders = study.table("reservations", "orders")
     pending = analysis.backlog_by_arrival_week(orders, study.horizon_s("reservations"), by=("rule",))
     _write_parquet(pending, study.figure_dir("fig20") / "pending.parquet")
@@ -283,10 +336,71 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
     return drawn
 
 
+def _same(a, b):
+    """Equal values, NaN equal to NaN (a run's median delivery time is NaN when nothing was delivered)."""
+    return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
+
+
+def check(figure, results="results", quick=False, log=print):
+    """Re-run :data:`CHECK_RUNS` of ``figure`` and compare them with its ``runs.parquet``.
+
+    The runs execute one after the other in this process, in a temporary results root
+    (a warm-started run first re-runs the run whose fleet it starts from), so nothing under
+    ``results`` is written. Runs of the list that the table does not hold (``--quick`` has
+    seeds 0-1 only) are skipped. Returns the differences, one line each: empty if every
+    value of every re-run summary equals the table's.
+    """
+    from .fleet import seeded_path
+
+    study = Study(results, quick, jobs=1, log=log)
+    path = study.root / figure / "runs.parquet"
+    if not path.exists():
+        raise SweepError(f"{path} is missing: run dronefleet reproduce {figure}{' --quick' if quick else ''} "
+                         "first (it writes the table that --check compares with)")
+    committed = pd.read_parquet(path)
+    rows = {(name, run): row for name, run, row in zip(committed["sweep"], committed["run"],
+                                                        committed.to_dict("records"))}
+    chosen = [key for key in CHECK_RUNS[figure] if key in rows]
+    if not chosen:
+        raise SweepError(f"{path} holds none of the runs that --check re-runs for {figure}: "
+                         f"{', '.join(f'{name} {run}' for name, run in CHECK_RUNS[figure])}")
+    log(f"{figure}: re-running {len(chosen)} of the {len(committed)} runs in {path}")
+    differences = []
+    with tempfile.TemporaryDirectory(prefix="dronefleet-check-") as tmp:
+        fresh = Study(tmp, quick, jobs=1, log=log)
+        for name, run_id in chosen:
+            run = next((r for r in fresh.sweep(name).runs if r.id == run_id), None)
+            if run is None:
+                raise SweepError(f"{path}: run {run_id} is not in the sweep {fresh.sweep(name).path} any more")
+            if run.config.fleet_file:  # starts from a fleet of the rules sweep: make that first
+                fleet = seeded_path(run.config.fleet_file, run.config.seed)
+                fresh.ensure_runs("rules", [r for r in fresh.sweep("rules").runs
+                                            if r.path(fresh.out("rules"), "fleet") == fleet])
+            fresh.ensure_runs(name, [run])
+            summary = pq.read_table(run.path(fresh.out(name), "summary")).to_pylist()[0]
+            found = [f"{figure} {name} {run_id}: {column} committed {rows[name, run_id].get(column)!r}, "
+                     f"re-run {value!r}"
+                     for column, value in summary.items() if not _same(rows[name, run_id].get(column), value)]
+            log(f"  {name} {run_id}: {len(summary)} values, "
+                f"{'identical' if not found else f'{len(found)} differ'}", flush=True)
+            differences += found
+    return differences
+
+
 def command(args):
     """``dronefleet reproduce``."""
     figures = FIGURES if args.figure == "all" else (args.figure,)
     start = time.perf_counter()
+    if args.check:
+        if args.redraw:
+            raise SweepError("--check re-runs runs and --redraw only draws: give one of them")
+        differences = [line for figure in figures for line in check(figure, args.results, args.quick)]
+        for line in differences:
+            print(f"  differs: {line}")
+        print(f"reproduce {args.figure} --check: "
+              f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
+              f"({time.perf_counter() - start:.1f} s)")
+        return 1 if differences else 0
     reproduce(figures, args.results, args.quick, args.jobs, args.redraw)
     print(f"reproduce {args.figure}: done in {time.perf_counter() - start:.1f} s")
     return 0

@@ -17,8 +17,12 @@ Keys in ``[set]`` and ``[grid]`` are ``section.key`` or bare key names, as with
 ``dronefleet run --set``. :func:`load_sweep` builds (and so validates) the config of
 every run before anything runs; any problem is a :class:`SweepError` naming the key.
 
-Runs are enumerated in one fixed order: the grid's product in the file's key order (the
-last key varies fastest), seeds innermost. Task ``k`` of a job array (0-based) holds runs
+The grid's keys are taken in one canonical order, sorted by parameter name, whatever
+their order in the file: two files that differ only in the order of their ``[grid]`` keys
+are the same sweep (same runs, same tasks, same partition layout), so one dataset never
+gets two layouts (glob readers would see each run twice). Runs are enumerated in one fixed
+order: the grid's product in that canonical key order (the last key varies fastest), seeds
+innermost. Task ``k`` of a job array (0-based) holds runs
 ``[k * runs_per_task, (k + 1) * runs_per_task)``.
 
 The dataset of a sweep, under ``<results>/<name>/``::
@@ -30,7 +34,7 @@ The dataset of a sweep, under ``<results>/<name>/``::
 
 ``<table>`` is each of ``orders, attempts, fleet, timeseries, summary``, so every table is
 its own hive dataset that pandas, pyarrow and DuckDB read as one table. The partition keys
-are the grid's parameter names (bare), then ``seed``; values are ``str(value)`` of the
+are the grid's parameter names (bare, sorted by name), then ``seed``; values are ``str(value)`` of the
 config's value (``15.0``, ``3``, ``random``), percent-encoded as hive readers expect. A
 file holds no column named like a partition key (only ``summary`` repeats config values:
 they come back from the path), because readers refuse a column that is both. Directories
@@ -69,6 +73,11 @@ _SECTIONS = ("sweep", "set", "grid")
 _SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task")
 _SEED_RANGE_KEYS = ("start", "count")
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
+#: A Dask scheduler address: [protocol://]host:port (Dask's default protocol is tcp), host a
+#: name, an IPv4 or a bracketed IPv6 address.
+_LABEL = r"[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?"   # of a host name: 1-63 characters
+_SCHEDULER = re.compile(rf"(?:(?:tcp|tls|ucx|ws|wss)://)?(?P<host>{_LABEL}(?:\.{_LABEL})*|\[[0-9A-Fa-f:.]+\])"
+                        r":(?P<port>[0-9]{1,5})")
 
 
 class SweepError(ConfigError):
@@ -80,7 +89,7 @@ class Run:
     """One run of a sweep: its resolved config and the partition keys that place it."""
 
     config: Config
-    keys: tuple[str, ...]   # the grid's parameter names, then "seed"
+    keys: tuple[str, ...]   # the grid's parameter names (sorted), then "seed"
 
     @property
     def partition(self) -> str:
@@ -106,7 +115,7 @@ class Sweep:
 
     path: Path                        # the sweep file, absolute
     name: str
-    grid: dict[str, tuple]            # parameter name -> values, as the config holds them
+    grid: dict[str, tuple]            # parameter name (sorted) -> values, as the config holds them
     seeds: tuple[int, ...]
     runs_per_task: int
     runs: tuple[Run, ...]             # in task order
@@ -184,7 +193,7 @@ def _grid(table, where: str) -> dict[str, list]:
             raise SweepError(f"{where}: {name} is an empty list: it would make no runs", [name])
         if (value := _repeated(values)) is not None:
             raise SweepError(f"{where}: {name} lists {value!r} more than once", [name])
-    return grid
+    return dict(sorted(grid.items()))  # the canonical key order: one partition layout per dataset
 
 
 def _seeds(value, where: str) -> tuple:
@@ -299,18 +308,36 @@ def execute(run: Run, out: Path) -> str | None:
             write_table(data.drop_columns([k for k in run.keys if k in data.column_names]), path, run.config)
     except Exception as error:  # recorded, and the sweep goes on with the other runs
         return _record_failure(run, out, f"{type(error).__name__}: {error}", traceback.format_exc())
-    run.failure_path(out).unlink(missing_ok=True)
+    failure = run.failure_path(out)
+    try:
+        failure.unlink(missing_ok=True)
+    except OSError as error:  # the run is done (its summary says so); the stale record only misleads
+        _report(f"cannot remove the failure record {failure} of run {run.partition}, which is now done: "
+                f"{error.strerror or error}")
     return None
 
 
+def _report(message: str) -> None:
+    print(f"dronefleet: warning: {message}", file=sys.stderr, flush=True)
+
+
 def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
-    """Write ``_failed/<run id>.json`` (error, traceback, config) for ``run``; return ``error``."""
+    """Write ``_failed/<run id>.json`` (error, traceback, config) for ``run``; return ``error``.
+
+    A record that cannot be written (``_failed`` unwritable, disk full) is reported on
+    stderr, one line, and the sweep goes on: the run is not done either way, so ``status``
+    lists it as missing and a rerun redoes it, and the command still reports the error.
+    """
     from .records import write_atomic
 
     record = {"run": run.partition, "error": error, "traceback": trace, "config": run.config.to_dict()}
     failure = run.failure_path(out)
-    failure.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
+    try:
+        failure.parent.mkdir(parents=True, exist_ok=True)
+        write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
+    except OSError as problem:
+        _report(f"cannot write the failure record {failure} of run {run.partition} "
+                f"({problem.strerror or problem}); its error: {error.splitlines()[0] if error else error}")
     return error
 
 
@@ -350,16 +377,57 @@ def state(run: Run, out: Path) -> str:
 # --------------------------------------------------------------------------- running a sweep
 
 
-def task_from_environment(environ=os.environ) -> int | None:
-    """The 0-based job-array task given by the scheduler's variable (:data:`TASK_VARIABLES`), if any.
+def check_scheduler(address: str) -> str:
+    """``address`` if it is a Dask scheduler address ``[protocol://]host:port``; SweepError otherwise.
 
-    SGE sets ``SGE_TASK_ID=undefined`` and LSF ``LSB_JOBINDEX=0`` outside arrays: no task.
+    Checked before anything runs: Dask's own parser fails with a traceback, or only after a
+    connection attempt.
     """
+    match = _SCHEDULER.fullmatch(address)
+    if match is None or len(match["host"]) > 253 or not 1 <= int(match["port"]) <= 65535:
+        shown = repr(address) if len(address) <= 80 else f"{address[:80]!r}... ({len(address)} characters)"
+        raise SweepError(f"--scheduler {shown} is not a Dask scheduler address: expected [protocol://]host:port, "
+                         "protocol tcp (the default), tls, ucx, ws or wss, host a name (at most 253 "
+                         "characters) or an IP address, port 1-65535 (e.g. tcp://10.0.0.1:8786)")
+    return address
+
+
+#: Values a scheduler sets outside job arrays: the variable then gives no task.
+#: (SGE sets ``SGE_TASK_ID=undefined`` in a job that is not an array, LSF ``LSB_JOBINDEX=0``.)
+_NOT_AN_ARRAY = {"SGE_TASK_ID": "undefined", "LSB_JOBINDEX": "0"}
+
+
+def task_from_environment(environ=os.environ, n_tasks: int | None = None) -> int | None:
+    """The 0-based job-array task given by the scheduler's variables (:data:`TASK_VARIABLES`), if any.
+
+    Every variable that is set is checked, and the first gives the task. A variable that is
+    unset, empty or holds its scheduler's "not an array" value (``SGE_TASK_ID=undefined``,
+    ``LSB_JOBINDEX=0``) gives none. Any other value must be ASCII digits naming one of the
+    ``n_tasks`` tasks (``0..n_tasks - 1``, or ``1..n_tasks`` for SGE and LSF, whose arrays
+    start at 1).
+
+    Raises
+    ------
+    SweepError
+        A value that is not such an index (``abc``, ``-1``, ``²``, beyond the array): running
+        the whole sweep, or the wrong task, in its place would be silently wrong.
+    """
+    tasks = []
     for variable, first in TASK_VARIABLES:
         value = environ.get(variable, "")
-        if value.isdigit() and int(value) >= first:
-            return int(value) - first
-    return None
+        if value in ("", _NOT_AN_ARRAY.get(variable)):
+            continue
+        last = None if n_tasks is None else first + n_tasks - 1
+        allowed = f"an integer {first}-{last}" if last is not None else f"an integer >= {first}"
+        # isdigit() alone takes '²' and other Unicode digits, which int() refuses; 19 digits and
+        # more are beyond any array (and int() refuses thousands of them)
+        index = int(value) if value.isascii() and value.isdigit() and len(value) < 19 else -1
+        if index < first or (last is not None and index > last):
+            shown = repr(value) if len(value) <= 40 else f"{value[:40]!r}... ({len(value)} characters)"
+            raise SweepError(f"{variable}={shown} is not a job-array task of this sweep: expected {allowed}"
+                             + (f" ({n_tasks} tasks)" if n_tasks is not None else ""), [variable])
+        tasks.append(index - first)
+    return tasks[0] if tasks else None
 
 
 def available_cpus() -> int:
@@ -413,12 +481,12 @@ def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | Non
 
     todo = [run for run in runs if state(run, out) != "done"]
     out = out.absolute()  # workers may have another working directory
-    out.mkdir(parents=True, exist_ok=True)
     function = partial(execute, out=out)
     if scheduler is None:
         results = executors.local(function, todo, jobs)
-    else:
+    else:  # connects here: an unreachable scheduler is refused before anything is written
         results = executors.dask(function, todo, scheduler, keys=[f"{sweep.name}/{run.id}" for run in todo])
+    out.mkdir(parents=True, exist_ok=True)
     failures = {}
     for finished, (run, error, crash) in enumerate(results, start=1):
         if crash is not None:
@@ -555,12 +623,14 @@ def plan_command(args) -> int:
 def run_command(args) -> int:
     """``dronefleet sweep run``: one task's runs, or all of them (local processes or Dask)."""
     sweep, out = _open(args)
-    task = args.task_id if args.task_id is not None else task_from_environment()
+    task = args.task_id if args.task_id is not None else task_from_environment(n_tasks=sweep.n_tasks)
     if args.scheduler is not None and args.executor != "dask":
         raise SweepError("--scheduler is the address of a Dask scheduler: use it with --executor dask")
     if args.executor == "dask" and (args.scheduler is None or task is not None):
         raise SweepError("--executor dask runs every run of the sweep on the cluster at --scheduler ADDRESS "
                          "(e.g. tcp://10.0.0.1:8786), without a task id")
+    if args.scheduler is not None:
+        check_scheduler(args.scheduler)
     runs = sweep.runs if task is None else sweep.task(task)
     jobs = args.jobs or (1 if task is not None else available_cpus())
     where = (f"on the Dask cluster at {args.scheduler}" if args.executor == "dask"

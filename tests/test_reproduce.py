@@ -145,3 +145,15 @@ def test_without_matplotlib_nothing_runs(tmp_path, monkeypatch, capsys):
     assert cli.main(["reproduce", "fig16", "--quick", "--results", str(tmp_path)]) == 2
     assert "pip install 'dronefleet[plots]'" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("figure, runs", [("fig16", 36), ("fig17", 6), ("fig18", 2), ("fig19", 72 + 12),
+                                          ("fig20", 4)])
+def test_each_figure_lists_its_runs_and_they_re_derive(quick, figure, runs):
+    root, _, _ = quick  # quick mode: 2 seeds
+    table = pd.read_parquet(root / figure / "runs.parquet")
+    assert len(table) == runs and not table.duplicated(["sweep", "run"]).any()
+    assert {"delivered", "median_delivery_time_s", "seed"} <= set(table.columns)
+    lines = []
+    assert reproduce.check(figure, root.parent, quick=True, log=lambda *a, **k: lines.append(" ".join(map(str, a)))) == []
+    assert any(line.endswith("identical") for line in lines)  # seeds 0-1 of CHECK_RUNS, the others skipped

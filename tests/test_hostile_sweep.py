@@ -1,0 +1,257 @@
+"""Hostile input to `dronefleet sweep run` and what a sweep must survive.
+
+Every hostile job-array variable, flag and sweep file ends with exit code 2 and a one-line
+message naming the value and what is allowed, before any run: nothing is written. A
+failure record that cannot be written does not stop the sweep; grid keys in another order
+give the same sweep and one partition layout; workers and the resource tracker end when
+the sweep's process is killed.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from dronefleet import cli, executors, simulation, sweep as sw
+
+ROOT = Path(__file__).resolve().parents[1]
+SMOKE = ROOT / "configs" / "sweeps" / "smoke.toml"   # 8 runs, 3 tasks of up to 3 runs
+
+
+def run_cli(args):
+    """cli.main's exit code, argparse's included (it exits with 2 on a bad flag)."""
+    try:
+        return cli.main(args)
+    except SystemExit as stop:
+        return stop.code
+
+
+@pytest.fixture
+def no_array(monkeypatch):
+    """No scheduler variable from the environment the tests run in (a SLURM job, say)."""
+    for name, _ in sw.TASK_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+
+
+def refused(capsys, args, fragment, results):
+    """Exit 2, the message on one line (argparse's usage lines aside) with ``fragment``, nothing written."""
+    assert run_cli(args) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    message = [line for line in err.splitlines() if "error:" in line]
+    assert len(message) == 1 and fragment in message[0], err
+    assert not any(results.iterdir()), list(results.iterdir())
+
+
+@pytest.mark.parametrize("variable, value, fragment", [
+    ("SLURM_ARRAY_TASK_ID", "abc", "SLURM_ARRAY_TASK_ID='abc' is not a job-array task of this sweep: "
+                                   "expected an integer 0-2 (3 tasks)"),
+    ("SLURM_ARRAY_TASK_ID", "-1", "SLURM_ARRAY_TASK_ID='-1'"),
+    ("SLURM_ARRAY_TASK_ID", "²", "SLURM_ARRAY_TASK_ID='²'"),          # str.isdigit() takes it, int() does not
+    ("SLURM_ARRAY_TASK_ID", "١", "expected an integer 0-2"),          # an Arabic-Indic one: int() takes it
+    ("SLURM_ARRAY_TASK_ID", "3", "SLURM_ARRAY_TASK_ID='3'"),           # one beyond the array
+    ("SLURM_ARRAY_TASK_ID", " 1", "SLURM_ARRAY_TASK_ID=' 1'"),
+    ("SLURM_ARRAY_TASK_ID", "1.0", "expected an integer 0-2"),
+    ("SLURM_ARRAY_TASK_ID", "9" * 5000, "(5000 characters)"),          # never printed whole
+    ("PBS_ARRAY_INDEX", "x", "PBS_ARRAY_INDEX='x'"),
+    ("PBS_ARRAY_INDEX", "3", "expected an integer 0-2"),
+    ("SGE_TASK_ID", "0", "SGE_TASK_ID='0' is not a job-array task of this sweep: expected an integer 1-3"),
+    ("SGE_TASK_ID", "4", "expected an integer 1-3"),
+    ("SGE_TASK_ID", "Undefined", "SGE_TASK_ID='Undefined'"),
+    ("LSB_JOBINDEX", "-2", "LSB_JOBINDEX='-2'"),
+    ("LSB_JOBINDEX", "4", "expected an integer 1-3"),
+])
+def test_hostile_job_array_variables_are_refused_before_any_run(tmp_path, monkeypatch, capsys, no_array,
+                                                                variable, value, fragment):
+    monkeypatch.setenv(variable, value)
+    refused(capsys, ["sweep", "run", str(SMOKE), "--results", str(tmp_path)], fragment, tmp_path)
+
+
+@pytest.mark.parametrize("variable, value", [("SGE_TASK_ID", "undefined"), ("LSB_JOBINDEX", "0"),
+                                             ("SLURM_ARRAY_TASK_ID", "")])
+def test_outside_arrays_the_schedulers_values_give_no_task(variable, value):
+    # SGE sets SGE_TASK_ID=undefined and LSF LSB_JOBINDEX=0 in a job that is not an array
+    assert sw.task_from_environment({variable: value}, n_tasks=3) is None
+
+
+def test_every_set_variable_is_checked_not_only_the_first():
+    with pytest.raises(sw.SweepError, match="LSB_JOBINDEX='x'"):
+        sw.task_from_environment({"SLURM_ARRAY_TASK_ID": "1", "LSB_JOBINDEX": "x"}, n_tasks=3)
+
+
+@pytest.mark.parametrize("flags, fragment", [
+    (["--task-id", "²"], "argument --task-id: expected an integer >= 0 (at most 18 digits), got '²'"),
+    (["--task-id", "-1"], "got '-1'"),
+    (["--task-id", "abc"], "got 'abc'"),
+    (["--task-id", "1" * 40], "expected an integer >= 0 (at most 18 digits)"),
+    (["--task-id", "3"], "task 3 does not exist: sweep smoke has 3 tasks, 0-2"),
+    (["--jobs", "²"], "argument --jobs: expected an integer >= 1"),
+    (["--jobs", "0"], "argument --jobs: expected an integer >= 1 (at most 18 digits), got '0'"),
+    (["--executor", "dask", "--scheduler", "tcp://"], "--scheduler 'tcp://' is not a Dask scheduler address: "
+                                                      "expected [protocol://]host:port"),
+    (["--executor", "dask", "--scheduler", "tcp://10.0.0.1"], "'tcp://10.0.0.1' is not a Dask scheduler"),
+    (["--executor", "dask", "--scheduler", "tcp://10.0.0.1:99999"], "port 1-65535"),
+    (["--executor", "dask", "--scheduler", "tcp://host:port"], "'tcp://host:port' is not"),
+    (["--executor", "dask", "--scheduler", "http://10.0.0.1:8786"], "'http://10.0.0.1:8786' is not"),
+    (["--executor", "dask", "--scheduler", "tcp://a b:8786"], "'tcp://a b:8786' is not"),
+    (["--executor", "dask", "--scheduler", "tcp://x:1\nrm"], "'tcp://x:1\\nrm' is not"),
+    (["--executor", "dask", "--scheduler", "tcp://" + "a" * 5000 + ":1"], "characters) is not a Dask"),
+    (["--scheduler", "tcp://10.0.0.1:8786"], "use it with --executor dask"),
+])
+def test_hostile_flags_are_refused_before_any_run(tmp_path, capsys, no_array, flags, fragment):
+    refused(capsys, ["sweep", "run", str(SMOKE), "--results", str(tmp_path), *flags], fragment, tmp_path)
+
+
+def test_a_scheduler_that_does_not_answer_is_refused_within_the_timeout(tmp_path, capsys, monkeypatch, no_array):
+    monkeypatch.setattr(executors, "SCHEDULER_TIMEOUT_S", 2.0)
+    start = time.monotonic()
+    refused(capsys, ["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--executor", "dask",
+                     "--scheduler", "tcp://127.0.0.1:1"], "cannot reach the Dask scheduler at tcp://127.0.0.1:1 "
+                                                          "within 2 s", tmp_path)
+    assert time.monotonic() - start < 30  # bounded: not Dask's default wait, not a hang
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("[sweep]\nseeds = [0]\n[grid]\nrule = []\n", "rule is an empty list"),
+    ("[sweep]\nseeds = [0]\n[grid]\ntau_minutes = [15.0, 15]\n", "tau_minutes lists 15 more than once"),
+    ("[sweep]\nseeds = [0]\nruns_per_task = 0\n[grid]\nrule = ['random']\n", "runs_per_task must be an integer >= 1"),
+    ("[sweep]\nseeds = [-1]\n[grid]\nrule = ['random']\n", "[sweep] seeds"),
+    ("[sweep]\nseeds = [0]\n[grid]\nrule = ['nope']\n", "[grid] at rule = 'nope'"),
+    ("[sweep]\nseeds = [0]\n[grid]\nnope = [1]\n", "nope"),
+    ("[grid]\nrule = ['random']\n", "[sweep] seeds: give a non-empty list"),
+])
+def test_hostile_sweep_files_are_refused_before_any_run(tmp_path, capsys, no_array, text, fragment):
+    path = tmp_path / "hostile.toml"
+    path.write_text(text)
+    results = tmp_path / "results"
+    results.mkdir()
+    refused(capsys, ["sweep", "run", str(path), "--results", str(results)], fragment, results)
+
+
+# ---------------------------------------------------------------------------- what a sweep survives
+
+
+def test_a_failure_record_that_cannot_be_written_is_reported_and_the_sweep_goes_on(tmp_path, monkeypatch, capsys,
+                                                                                   no_array):
+    real = simulation.simulate
+
+    def simulate(config, **kwargs):
+        if config.rule == "random" and config.tau_minutes == 15.0 and config.seed == 1:
+            raise ValueError("injected failure")
+        return real(config, **kwargs)
+
+    monkeypatch.setattr(simulation, "simulate", simulate)
+    out = tmp_path / "smoke"
+    out.mkdir()
+    (out / "_failed").write_text("a file where the failure records' directory belongs")
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--jobs", "1"]) == 1
+    captured = capsys.readouterr()
+    warning = [line for line in captured.err.splitlines() if "cannot write the failure record" in line]
+    assert len(warning) == 1 and "rule=random/tau_minutes=15.0/seed=1" in warning[0], captured.err
+    assert "its error: ValueError: injected failure" in warning[0]
+    assert "ran 8, skipped 0 done before, 1 failed" in captured.out
+    s = sw.load_sweep(SMOKE)
+    assert [sw.state(run, out) for run in s.runs].count("done") == 7
+    # the run is not done, so the next sweep run redoes it
+    monkeypatch.setattr(simulation, "simulate", real)
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--jobs", "1"]) == 0
+    assert "ran 1, skipped 7 done before, 0 failed" in capsys.readouterr().out
+
+
+def test_grid_keys_in_another_order_are_the_same_sweep_with_one_layout(tmp_path, capsys, no_array):
+    text = SMOKE.read_text()
+    rule_first = 'rule = ["least_confident", "random"]\ntau_minutes = [15.0, 30.0]\n'
+    assert rule_first in text
+    swapped = tmp_path / "swapped.toml"
+    swapped.write_text(text.replace(rule_first, 'tau_minutes = [15.0, 30.0]\nrule = ["least_confident", "random"]\n'))
+    a, b = sw.load_sweep(SMOKE), sw.load_sweep(swapped)
+    assert list(a.grid) == list(b.grid) == ["rule", "tau_minutes"]     # sorted by name
+    assert [r.partition for r in a.runs] == [r.partition for r in b.runs]  # same runs, same tasks
+    assert [r.config for r in a.runs] == [r.config for r in b.runs]
+    results = tmp_path / "results"
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(results), "--jobs", "1"]) == 0
+    assert cli.main(["sweep", "run", str(swapped), "--results", str(results), "--jobs", "1"]) == 0
+    assert "ran 0, skipped 8 done before" in capsys.readouterr().out
+    layouts = {tuple(part.split("=")[0] for part in path.relative_to(results / "smoke" / "summary").parts[:-1])
+               for path in (results / "smoke" / "summary").rglob("*.parquet")}
+    assert layouts == {("rule", "tau_minutes", "seed")}
+
+
+# ---------------------------------------------------------------------------- a killed sweep leaves no process
+
+
+def _children(pid):
+    """Pids whose parent is ``pid``, from /proc."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:  # ended meanwhile
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(entry.name))
+    return found
+
+
+def _descendants(pid):
+    found, todo = [], [pid]
+    while todo:
+        children = _children(todo.pop())
+        found += children
+        todo += children
+    return found
+
+
+def _alive(pid):
+    """Running, not a zombie waiting for its new parent to reap it."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from /proc (Linux)")
+def test_a_killed_sweep_leaves_no_worker_and_no_resource_tracker(tmp_path):
+    path = tmp_path / "long.toml"  # 200 runs of 8 weeks on 2 workers: still running when killed
+    path.write_text('[sweep]\nname = "long"\nseeds = { start = 0, count = 200 }\n[grid]\nrule = ["least_confident"]\n')
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    for name, _ in sw.TASK_VARIABLES:
+        env.pop(name, None)
+    sweep = subprocess.Popen([sys.executable, "-m", "dronefleet.cli", "sweep", "run", str(path),
+                              "--results", str(tmp_path), "--jobs", "2"],
+                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    started = []
+    try:
+        deadline = time.monotonic() + 300  # the first run compiles the engine if no cache has it
+        # two workers and the multiprocessing resource tracker, which the first worker starts
+        while len(started := _descendants(sweep.pid)) < 3 and time.monotonic() < deadline:
+            assert sweep.poll() is None, "the sweep ended before it was killed"
+            time.sleep(0.1)
+        assert len(started) >= 3, started
+        assert any(b"resource_tracker" in Path(f"/proc/{pid}/cmdline").read_bytes() for pid in started)
+        time.sleep(1.0)  # workers running their first runs
+        started = _descendants(sweep.pid)
+        sweep.send_signal(signal.SIGKILL)
+        sweep.wait()
+        deadline = time.monotonic() + 10
+        while any(map(_alive, started)) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not [pid for pid in started if _alive(pid)]
+    finally:
+        sweep.kill()
+        for pid in started:  # if the test failed: end what it started
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
+
+
+def test_without_prctl_a_worker_ends_when_its_parent_is_gone():
+    # The portable fallback: a parent pid that is not this process's parent means "gone".
+    code = "import os; from dronefleet.executors import _watch_parent; _watch_parent(os.getppid() + 1)"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    assert subprocess.run([sys.executable, "-c", code], env=env, timeout=60).returncode == 1

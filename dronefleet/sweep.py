@@ -652,6 +652,14 @@ def run_command(args) -> int:
     return 1 if failures else 0
 
 
+def _recorded_error(path: Path) -> str:
+    """The error a ``_failed/`` record holds, or why it cannot be read (status never fails on it)."""
+    try:
+        return str(json.loads(path.read_text(encoding="utf-8"))["error"])[:500]
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        return f"(the record {path.name} cannot be read: {type(error).__name__})"
+
+
 def status_command(args) -> int:
     """``dronefleet sweep status``: done, missing and failed runs (with their errors)."""
     sweep, out = _open(args)
@@ -660,7 +668,7 @@ def status_command(args) -> int:
           ", ".join(f"{found.count(s)} {s}" for s in ("done", "missing", "failed")))
     for run, s in zip(sweep.runs, found):
         if s == "failed":
-            print(f"  failed   {run.partition}: {json.loads(run.failure_path(out).read_text())['error']}")
+            print(f"  failed   {run.partition}: {_recorded_error(run.failure_path(out))}")
     unfinished = sorted({i // sweep.runs_per_task for i, s in enumerate(found) if s != "done"})
     if unfinished:
         print(f"  tasks with runs not done: {_ranges(unfinished)} (rerun them: sweep run --task-id N, "

@@ -255,3 +255,15 @@ def test_without_prctl_a_worker_ends_when_its_parent_is_gone():
     code = "import os; from dronefleet.executors import _watch_parent; _watch_parent(os.getppid() + 1)"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     assert subprocess.run([sys.executable, "-c", code], env=env, timeout=60).returncode == 1
+
+
+def test_status_reports_an_unreadable_failure_record_instead_of_failing(tmp_path, capsys, no_array):
+    s = sw.load_sweep(SMOKE)
+    out = tmp_path / "smoke"
+    record = s.runs[0].failure_path(out)
+    record.parent.mkdir(parents=True)
+    record.write_bytes(b"\xff{not json")
+    assert cli.main(["sweep", "status", str(SMOKE), "--results", str(tmp_path)]) == 1
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.err
+    assert f"failed   {s.runs[0].partition}: (the record {record.name} cannot be read" in captured.out

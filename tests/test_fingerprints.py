@@ -142,6 +142,8 @@ def test_same_fingerprints_with_older_cpu_code_paths(tmp_path):
 
 
 def test_same_fingerprints_compiled_for_a_generic_cpu(tmp_path):
-    # A fresh cache: numba compiles the engine again, for a CPU without SSE4/AVX/FMA.
-    knobs = {"NUMBA_CPU_NAME": "generic", "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    # A fresh cache: numba compiles the engine again, for a CPU without SSE4/AVX/FMA, and with
+    # every array index checked (an index derived from data that leaves its array raises).
+    knobs = {"NUMBA_CPU_NAME": "generic", "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache"),
+             "NUMBA_BOUNDSCHECK": "1"}
     assert _fingerprints_in_subprocess(knobs, tmp_path) == EXPECTED

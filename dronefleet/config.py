@@ -376,7 +376,10 @@ def _check_run_size(values: Mapping[str, Any]) -> None:
 
 def _show(value: Any) -> str:
     """repr of a value, cut to 60 characters: a message never prints a whole big value."""
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:  # an int too long to print (sys.get_int_max_str_digits)
+        return f"an integer of {value.bit_length()} bits"
     return text if len(text) <= 60 else text[:57] + "..."
 
 
@@ -546,7 +549,7 @@ def _parse_override(text: Any) -> tuple[str, Any]:
     try:
         doc = tomllib.loads(f"v = {raw}")
         value = doc["v"] if list(doc) == ["v"] else raw
-    except (tomllib.TOMLDecodeError, RecursionError):  # not a TOML value: a bare string
+    except (ValueError, RecursionError):  # not a TOML value (TOMLDecodeError, huge int): a bare string
         value = raw
     return name, value
 
@@ -597,7 +600,7 @@ def _read_toml(path: str | PathLike) -> dict[str, Any]:
                           "save it as UTF-8") from None
     try:
         return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
+    except ValueError as e:  # TOMLDecodeError, or an integer of too many digits
         raise ConfigError(f"cannot parse {where}: {e}") from None
     except RecursionError:
         raise ConfigError(f"cannot parse {where}: values nested too deeply") from None

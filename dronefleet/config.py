@@ -383,6 +383,11 @@ def _show(value: Any) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def _name(name: str) -> str:
+    """A key or section name for a message: as written if printable and short, else its cut repr."""
+    return name if name.isprintable() and len(name) <= 60 else _show(name)
+
+
 def _type_name(value: Any) -> str:
     return type(value).__name__
 
@@ -493,7 +498,7 @@ def _flatten(d: Any, where: str | None = None,
                     f"{pre}key {section!r} is at the top level; put it in section "
                     f"[{PARAMETERS[section].section}]", [section])
             raise ConfigError(
-                f"{pre}unknown section [{section}]{_suggest(section, SECTIONS)}. "
+                f"{pre}unknown section [{_name(section)}]{_suggest(section, SECTIONS)}. "
                 f"Allowed sections: {', '.join(SECTIONS)}")
         if not isinstance(table, Mapping):
             raise ConfigError(f"{pre}[{section}] must be a table of key = value, "
@@ -513,12 +518,12 @@ def _unknown_key_message(section: str, key: str) -> str:
     if key in PARAMETERS:
         return (f"{section}.{key} is not a key of [{section}]; {key} belongs in "
                 f"[{PARAMETERS[key].section}]")
-    return (f"unknown key {section}.{key}{_suggest(key, SECTIONS[section])}. "
+    return (f"unknown key {section}.{_name(key)}{_suggest(key, SECTIONS[section])}. "
             f"Allowed keys in [{section}]: {', '.join(SECTIONS[section])}")
 
 
 def _unknown_name_message(name: str) -> str:
-    return f"unknown key {name!r}{_suggest(name, PARAMETERS)}. Allowed keys: {', '.join(PARAMETERS)}"
+    return f"unknown key {_show(name)}{_suggest(name, PARAMETERS)}. Allowed keys: {', '.join(PARAMETERS)}"
 
 
 def resolve_key(key: str) -> str:
@@ -526,7 +531,7 @@ def resolve_key(key: str) -> str:
     if "." in key:
         section, _, name = key.partition(".")
         if section not in SECTIONS:
-            raise ConfigError(f"unknown section {section!r} in {key!r}"
+            raise ConfigError(f"unknown section {_show(section)} in {_show(key)}"
                               f"{_suggest(section, SECTIONS)}. "
                               f"Allowed sections: {', '.join(SECTIONS)}")
         if name not in SECTIONS[section]:
@@ -540,11 +545,11 @@ def resolve_key(key: str) -> str:
 def _parse_override(text: Any) -> tuple[str, Any]:
     """'key=value' -> (parameter name, value); value read as TOML, else a bare string."""
     if not isinstance(text, str) or "=" not in text:
-        raise ConfigError(f"--set needs key=value, got {text!r}")
+        raise ConfigError(f"--set needs key=value, got {_show(text)}")
     key, _, raw = text.partition("=")
     key, raw = key.strip(), raw.strip()
     if not key:
-        raise ConfigError(f"--set needs key=value, got {text!r}")
+        raise ConfigError(f"--set needs key=value, got {_show(text)}")
     name = resolve_key(key)
     try:
         doc = tomllib.loads(f"v = {raw}")

@@ -6,6 +6,11 @@ standardised features, intercept, learner step counter, SoC, lost flag and the o
 period that produced it, with the resolved config of that run in its metadata. A run's
 own ``fleet.parquet`` (one row per UAV and week end) is accepted too: its last instant
 is taken.
+
+A fleet file is input like a config: :func:`load_fleet` checks all of it before a run
+starts (the engine trusts its arrays and would read or write out of bounds on, say, a
+NaN SoH) and refuses it with a one-line :class:`FleetFileError` naming the file, the
+column, the UAV and the value.
 """
 
 from dataclasses import dataclass
@@ -115,7 +120,7 @@ def load_fleet(path, config):
         saved_config = read_config(path)
     except ConfigError as error:
         raise refuse(f"holds a config that is not valid now ({error})") from None
-    except (OSError, pa.ArrowException, TypeError, KeyError, ValueError):  # no or malformed metadata
+    except (OSError, pa.ArrowException, TypeError, KeyError, ValueError, RecursionError):  # no or bad metadata
         raise refuse("is not a dronefleet fleet file: its metadata holds no dronefleet config") from None
     schema = pq.read_schema(path)
     missing = [c for c in COLUMNS if c not in schema.names]

@@ -92,6 +92,14 @@ def fleet_parquet_without_metadata(tmp_path):
     return path
 
 
+def fleet_with_metadata(config_text):
+    def make(tmp_path):
+        path = tmp_path / "fleet.parquet"
+        pq.write_table(pa.table(fleet_columns()).replace_schema_metadata({"dronefleet.config": config_text}), path)
+        return path
+    return make
+
+
 def truncated_fleet(tmp_path):
     whole = write_fleet(tmp_path / "whole.parquet").read_bytes()
     path = tmp_path / "truncated.parquet"
@@ -220,6 +228,10 @@ HOSTILE = [
     ("fleet of another fleet size", fleet_file(fleet_of_other_size), "was saved with n_uavs = 5, but this run has"),
     ("fleet without metadata", fleet_file(fleet_parquet_without_metadata),
      "is not a dronefleet fleet file: its metadata holds no dronefleet config"),
+    ("fleet metadata not JSON", fleet_file(fleet_with_metadata("{not json")), "its metadata holds no dronefleet"),
+    ("fleet metadata nested deeply", fleet_file(fleet_with_metadata("[" * 100_000)), "its metadata holds no"),
+    ("fleet metadata config invalid", fleet_file(fleet_with_metadata('{"fleet": {"n_uavs": 0}}')),
+     "holds a config that is not valid now (fleet.n_uavs = 0 is out of range: allowed [1, 32767])"),
     ("fleet truncated", fleet_file(truncated_fleet), "is not a readable parquet file"),
     ("fleet is text", fleet_file(text_file("fleet.parquet", "soh,soc\n1,2\n")), "is not a readable parquet file"),
     ("fleet is a directory", fleet_file(a_directory), "is not a file"),

@@ -366,7 +366,7 @@ def _check_run_size(values: Mapping[str, Any]) -> None:
         if size > limit:
             noun, keys, how = _RUN_SIZE_TERMS[name]
             how = how.format(*(_num(values[k]) for k in keys))
-            raise ConfigError(f"the run would hold ~{size:.2g} {noun} ({how}); at most {limit:g} allowed", keys)
+            raise ConfigError(f"the run would hold ~{size:.3g} {noun} ({how}); at most {limit:g} allowed", keys)
 
 
 # --------------------------------------------------------------------------

@@ -418,3 +418,27 @@ def test_to_json_deterministic():
     assert text == json.dumps(json.loads(text), sort_keys=True)
     assert text.index('"auction"') < text.index('"run"')
     assert default_config().to_json() != text
+
+
+# A run's size: each RUN_LIMITS term just below its limit is accepted, just above refused.
+_QUIET = {"tau_minutes": 1e6, "record_interval_s": 1e6, "advert_interval_s": 1e4}  # every other term small
+_SIZE_KNOBS = {
+    "orders": lambda x: {"horizon_weeks": 8.0, "tau_minutes": 8 * 604800.0 / 60.0 / x},
+    "samples": lambda x: {"horizon_weeks": 8.0, "record_interval_s": 8 * 604800.0 / (x - 1.0)},
+    "advert_ticks": lambda x: {"horizon_weeks": 8.0, "advert_interval_s": 8 * 604800.0 / x},
+    "fleet_rows": lambda x: {"n_uavs": 20000, "horizon_weeks": math.floor(x / 20000) - 1.0},
+    "fit_draws": lambda x: {"n_uavs": 1000, "initial_epochs": int(x // 1000)},
+}
+
+
+@pytest.mark.parametrize("term", sorted(_SIZE_KNOBS))
+def test_run_size_limits_refuse_just_above_and_accept_at_the_limit(term):
+    from dronefleet.config import RUN_LIMITS, run_size
+
+    limit = RUN_LIMITS[term]
+    at = replace(default_config(), **{**_QUIET, **_SIZE_KNOBS[term](limit)})
+    assert run_size(at)[term] == pytest.approx(limit, rel=1e-9)
+    with pytest.raises(ConfigError) as e:
+        replace(default_config(), **{**_QUIET, **_SIZE_KNOBS[term](1.02 * limit)})
+    assert str(e.value).startswith(f"the run would hold ~{1.02 * limit:.3g} ")
+    assert str(e.value).endswith(f"; at most {limit:g} allowed")

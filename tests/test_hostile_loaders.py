@@ -169,9 +169,9 @@ NAN, INF = math.nan, math.inf
 HOSTILE = [
     # ---- parameters that drive memory or time
     ("tau 1e-9 min", run_set("tau_minutes=1e-9"),
-     "the run would hold ~8.1e+13 orders (horizon 8 weeks / tau 1e-09 min); at most 1e+07 allowed"),
+     "the run would hold ~8.06e+13 orders (horizon 8 weeks / tau 1e-09 min); at most 1e+07 allowed"),
     ("record interval 1e-6 s", run_set("record_interval_s=1e-6"),
-     "~4.8e+12 time-series samples (horizon 8 weeks / record_interval_s 1e-06 s); at most 1e+07 allowed"),
+     "~4.84e+12 time-series samples (horizon 8 weeks / record_interval_s 1e-06 s); at most 1e+07 allowed"),
     ("horizon 1e6 weeks", run_set("horizon_weeks=1e6"),
      "run.horizon_weeks = 1000000.0 is out of range: allowed (0, 1000]"),
     ("initial epochs 1e8 (integer)", run_set("initial_epochs=100000000"),
@@ -184,7 +184,7 @@ HOSTILE = [
     ("threshold 0, advert 1e-6 s", run_set("rule=threshold", "theta=0", "advert_interval_s=1e-6"),
      "auction.advert_interval_s = 1e-06 is out of range: allowed >= 0.001"),
     ("threshold 0, advert 1 ms", run_set("rule=threshold", "theta=0", "advert_interval_s=0.001"),
-     "~4.8e+09 advertisement ticks (horizon 8 weeks / advert_interval_s 0.001 s); at most 3e+07 allowed"),
+     "~4.84e+09 advertisement ticks (horizon 8 weeks / advert_interval_s 0.001 s); at most 3e+07 allowed"),
     ("seed 2**63", lambda tmp_path: ["--seed", str(2**63)],
      "run.seed = 9223372036854775808 is out of range: allowed [0, 9223372036854775807]"),
     ("seed 2**63 by --set", run_set(f"seed={2**63}"), "run.seed = 9223372036854775808 is out of range"),

@@ -27,8 +27,8 @@ from .config import ConfigError
 BUILTIN_CONTROLLER = Path(__file__).parent / "data" / "uav-delivery-controller.yaml"
 
 #: Largest supervisor file read [bytes]. Real Nadzoru 2 files are a few KB (the largest
-#: known, ~15 KB); the cap keeps parsing to well under a second.
-MAX_FILE_BYTES = 1_000_000
+#: known, ~15 KB); the cap keeps parsing to about a second (libyaml: ~4 s per MB).
+MAX_FILE_BYTES = 256_000
 #: Deepest nesting of lists and mappings read (Nadzoru 2 files nest 3 deep: a mapping of lists of lists).
 MAX_DEPTH = 20
 #: Largest dense transition table built (K x states x events entries, int64): ~80 MB.

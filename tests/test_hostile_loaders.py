@@ -317,9 +317,9 @@ HOSTILE_SUPERVISORS = [
     ("integer of 5000 digits", b"num_events: " + b"9" * 5000, "not valid YAML"),
     ("not YAML", b"a: [1, 2\nb: }", "not valid YAML"),
     ("a list", b"[1, 2, 3]", "should be a mapping"),
-    ("huge value in a message", b"num_events: 1\nnum_supervisors: 1\nevents: [" + b"EV_a, " * 50_000 + b"]\n"
+    ("huge value in a message", b"num_events: 1\nnum_supervisors: 1\nevents: [" + b"EV_a, " * 30_000 + b"]\n"
      + b"ev_controllable: [1]\nsup_events: [[1]]\nsup_init_state: [0]\nsup_current_state: [0]\n"
-     + b"sup_data_pos: [0]\nsup_data: [0]\n", "events has 50000 entries but num_events is 1"),
+     + b"sup_data_pos: [0]\nsup_data: [0]\n", "events has 30000 entries but num_events is 1"),
     ("huge list shown cut", b"num_events: [" + b"1, " * 50_000 + b"]\nnum_supervisors: 1\nevents: []\n"
      + b"ev_controllable: []\nsup_events: []\nsup_init_state: []\nsup_current_state: []\n"
      + b"sup_data_pos: []\nsup_data: []\n", "num_events should be a positive integer, found [1, 1,"),

@@ -31,7 +31,8 @@ Decisions
   the last one wins) < ``seed`` argument.
 * Whatever drives memory or time is bounded before any work: by a parameter's
   range (``seed`` fits int64, ``n_uavs`` and weeks fit int16 columns, physical
-  ranges for capacity and charger power, ``advert_interval_s >= 1 ms``) or by the
+  ranges for masses, distances, energy parameters and the feature scaling, so
+  that no power, charging time or feature overflows; ``advert_interval_s >= 1 ms``) or by the
   run's size (:func:`run_size`, limits in :data:`RUN_LIMITS`), whose message
   gives the figure, e.g. "the run would hold ~3.2e+10 orders (horizon 8 weeks /
   tau 1e-09 min); at most 1e+07 allowed".
@@ -186,6 +187,9 @@ _POSITIVE = Interval(0, None, "neither")
 _NON_NEGATIVE = Interval(0, None, "left")
 _AT_LEAST_ONE = Interval(1, None, "left")
 _FRACTION = Interval(0, 1, "right")        # (0, 1]
+# Physical ranges, wide enough for any delivery UAV, so that no power, time or feature overflows.
+_MASS_KG = Interval(0, 1e4)
+_DISTANCE_M = Interval(0, 1e7, "right")
 
 
 # --------------------------------------------------------------------------
@@ -214,13 +218,13 @@ class Config:
     # [orders]
     tau_minutes: float = _p("orders", 15.0, float, _POSITIVE,
                             "mean inter-arrival time of orders, tau [min]")
-    mass_min_kg: float = _p("orders", 0.5, float, _NON_NEGATIVE,
+    mass_min_kg: float = _p("orders", 0.5, float, _MASS_KG,
                             "lower bound of the uniform parcel mass [kg]")
-    mass_max_kg: float = _p("orders", 5.0, float, _NON_NEGATIVE,
+    mass_max_kg: float = _p("orders", 5.0, float, _MASS_KG,
                             "upper bound of the uniform parcel mass [kg]")
-    distance_min_m: float = _p("orders", 1000.0, float, _POSITIVE,
+    distance_min_m: float = _p("orders", 1000.0, float, _DISTANCE_M,
                                "lower bound of the delivery distance [m]")
-    distance_max_m: float = _p("orders", 6000.0, float, _POSITIVE,
+    distance_max_m: float = _p("orders", 6000.0, float, _DISTANCE_M,
                                "upper bound of the delivery distance [m]")
     distance_sampling: str = _p("orders", "uniform", str, Options(("uniform", "annulus")),
                                 "'uniform': d ~ U(dmin, dmax); "
@@ -232,19 +236,19 @@ class Config:
     soh_max: float = _p("fleet", 1.0, float, _FRACTION,
                         "upper bound of the uniform state of health [fraction of capacity]")
     # [energy]
-    frame_mass_kg: float = _p("energy", 10.0, float, _NON_NEGATIVE, "frame mass m_f [kg]")
-    battery_mass_kg: float = _p("energy", 10.0, float, _NON_NEGATIVE, "battery mass m_b [kg]")
-    n_rotors: int = _p("energy", 8, int, _AT_LEAST_ONE, "number of rotors n_r")
-    rotor_area_m2: float = _p("energy", 0.27, float, _POSITIVE, "rotor disc area zeta [m^2]")
-    air_density_kg_m3: float = _p("energy", 1.225, float, _POSITIVE, "air density rho [kg/m^3]")
-    gravity_m_s2: float = _p("energy", 9.81, float, _POSITIVE,
+    frame_mass_kg: float = _p("energy", 10.0, float, _MASS_KG, "frame mass m_f [kg]")
+    battery_mass_kg: float = _p("energy", 10.0, float, _MASS_KG, "battery mass m_b [kg]")
+    n_rotors: int = _p("energy", 8, int, Interval(1, 1000), "number of rotors n_r")
+    rotor_area_m2: float = _p("energy", 0.27, float, Interval(0, 1e4, "right"), "rotor disc area zeta [m^2]")
+    air_density_kg_m3: float = _p("energy", 1.225, float, Interval(0, 100, "right"), "air density rho [kg/m^3]")
+    gravity_m_s2: float = _p("energy", 9.81, float, Interval(0, 100, "right"),
                              "gravitational acceleration g [m/s^2]")
-    speed_m_s: float = _p("energy", 10.0, float, _POSITIVE, "cruise speed v [m/s]")
+    speed_m_s: float = _p("energy", 10.0, float, Interval(0, 1e4, "right"), "cruise speed v [m/s]")
     # Physical ranges, wide enough for any UAV, keep charging times finite and bounded.
     capacity_wh: float = _p("energy", 800.0, float, Interval(1, 1e6),
                             "theoretical battery capacity C [Wh]")
     charger_power_w: float = _p("energy", 100.0, float, Interval(1, 1e6), "charger power P_c [W]")
-    charger_efficiency: float = _p("energy", 0.95, float, _FRACTION,
+    charger_efficiency: float = _p("energy", 0.95, float, Interval(0.01, 1),
                                    "charger efficiency gamma [fraction]")
     xi: float = _p("energy", 0.5, float, Interval(0, 1, "left"),
                    "abort threshold xi [fraction of take-off SoC]")
@@ -258,17 +262,17 @@ class Config:
     advert_interval_s: float = _p("auction", 2.0, float, Interval(1e-3, None),
                                   "advertising period Delta of the FC [s]")
     # [policy]
-    alpha: float = _p("policy", 0.01, float, _POSITIVE,
+    alpha: float = _p("policy", 0.01, float, Interval(0, 100, "right"),
                       "L2 regularisation strength of the SGD learner")
     eta0: float = _p("policy", 0.01, float, _POSITIVE,
                      "initial learning rate eta0 of the SGD learner")
     initial_epochs: int = _p("policy", 7, int, _AT_LEAST_ONE,
                              "epochs of the initial fit on the two assumed points")
     scaler_mean: tuple[float, float, float] = _p(
-        "policy", (3500.0, 2.75, 50.0), tuple, Interval(None, None),
+        "policy", (3500.0, 2.75, 50.0), tuple, Interval(-1e9, 1e9),
         "standardisation mean of the features (distance [m], mass [kg], SoC [%])", length=3)
     scaler_std: tuple[float, float, float] = _p(
-        "policy", (1443.38, 1.298, 28.87), tuple, _POSITIVE,
+        "policy", (1443.38, 1.298, 28.87), tuple, Interval(1e-6, 1e9),
         "standardisation std of the features (distance [m], mass [kg], SoC [%])", length=3)
 
     def __post_init__(self):

@@ -3,7 +3,8 @@
 Each parameter is one field of the frozen dataclass :class:`Config`, declared
 with its TOML section, type, default (the ``MODEL.md`` value), allowed range and
 a one-line doc with units (``PARAMETERS[name]`` holds that declaration). Rules
-that involve several parameters are all in :data:`_ORDERED_PAIRS`.
+that involve several parameters are all in :data:`_ORDERED_PAIRS` and
+:data:`RUN_LIMITS` (the size of the run: orders, samples, ticks, ...).
 
 Validation happens in exactly one place, :func:`_validate`, run by
 ``Config.__post_init__``: every ``Config`` that exists is valid, whichever entry
@@ -28,6 +29,14 @@ Decisions
   finite. ``scaler_*`` are lists (or tuples) of exactly 3 numbers.
 * Precedence in :func:`load_config`: defaults < file < overrides (in order,
   the last one wins) < ``seed`` argument.
+* Whatever drives memory or time is bounded before any work: by a parameter's
+  range (``seed`` fits int64, ``n_uavs`` and weeks fit int16 columns, physical
+  ranges for masses, distances, energy parameters and the feature scaling, so
+  that no power, charging time or feature overflows; ``advert_interval_s >= 1 ms``) or by the
+  run's size (:func:`run_size`, limits in :data:`RUN_LIMITS`), whose message
+  gives the figure, e.g. "the run would hold ~3.2e+10 orders (horizon 8 weeks /
+  tau 1e-09 min); at most 1e+07 allowed".
+* A config file must be UTF-8 TOML of at most :data:`MAX_CONFIG_BYTES`.
 """
 
 from __future__ import annotations
@@ -46,14 +55,19 @@ __all__ = [
     "PARAMETERS",
     "Config",
     "ConfigError",
+    "MAX_CONFIG_BYTES",
+    "RUN_LIMITS",
     "config_from_dict",
     "default_config",
     "load_config",
     "replace",
+    "run_size",
 ]
 
 SECONDS_PER_WEEK = 604_800.0
 SECONDS_PER_MINUTE = 60.0
+#: Largest config file read [bytes]; real ones are a few KB.
+MAX_CONFIG_BYTES = 1_000_000
 
 
 class ConfigError(ValueError):
@@ -73,8 +87,8 @@ class ConfigError(ValueError):
 
 
 def _num(x: float) -> str:
-    """A bound as a user would write it: 0, 1, 0.5, 100."""
-    return f"{x:g}"
+    """A bound as a user would write it: 0, 1, 0.5, 100 (an int bound in full)."""
+    return str(x) if isinstance(x, int) else f"{x:g}"
 
 
 @dataclass(frozen=True)
@@ -173,6 +187,9 @@ _POSITIVE = Interval(0, None, "neither")
 _NON_NEGATIVE = Interval(0, None, "left")
 _AT_LEAST_ONE = Interval(1, None, "left")
 _FRACTION = Interval(0, 1, "right")        # (0, 1]
+# Physical ranges, wide enough for any delivery UAV, so that no power, time or feature overflows.
+_MASS_KG = Interval(0, 1e4)
+_DISTANCE_M = Interval(0, 1e7, "right")
 
 
 # --------------------------------------------------------------------------
@@ -189,10 +206,10 @@ class Config:
     """
 
     # [run]
-    seed: int = _p("run", 0, int, _NON_NEGATIVE,
-                   "master seed from which every random stream is derived")
-    horizon_weeks: float = _p("run", 8.0, float, _POSITIVE,
-                              "operating period T [weeks]")
+    seed: int = _p("run", 0, int, Interval(0, 2**63 - 1),
+                   "master seed from which every random stream is derived (an int64 column)")
+    horizon_weeks: float = _p("run", 8.0, float, Interval(0, 1000, "right"),
+                              "operating period T [weeks] (weeks are int16 columns)")
     record_interval_s: float = _p("run", 900.0, float, _POSITIVE,
                                   "sampling period of the recorded time series [s]")
     fleet_file: str = _p("run", "", str, AnyText(),
@@ -201,36 +218,37 @@ class Config:
     # [orders]
     tau_minutes: float = _p("orders", 15.0, float, _POSITIVE,
                             "mean inter-arrival time of orders, tau [min]")
-    mass_min_kg: float = _p("orders", 0.5, float, _NON_NEGATIVE,
+    mass_min_kg: float = _p("orders", 0.5, float, _MASS_KG,
                             "lower bound of the uniform parcel mass [kg]")
-    mass_max_kg: float = _p("orders", 5.0, float, _NON_NEGATIVE,
+    mass_max_kg: float = _p("orders", 5.0, float, _MASS_KG,
                             "upper bound of the uniform parcel mass [kg]")
-    distance_min_m: float = _p("orders", 1000.0, float, _POSITIVE,
+    distance_min_m: float = _p("orders", 1000.0, float, _DISTANCE_M,
                                "lower bound of the delivery distance [m]")
-    distance_max_m: float = _p("orders", 6000.0, float, _POSITIVE,
+    distance_max_m: float = _p("orders", 6000.0, float, _DISTANCE_M,
                                "upper bound of the delivery distance [m]")
     distance_sampling: str = _p("orders", "uniform", str, Options(("uniform", "annulus")),
                                 "'uniform': d ~ U(dmin, dmax); "
                                 "'annulus': d = sqrt(U(dmin^2, dmax^2)) (reference code)")
     # [fleet]
-    n_uavs: int = _p("fleet", 25, int, _AT_LEAST_ONE, "fleet size S [UAVs]")
+    n_uavs: int = _p("fleet", 25, int, Interval(1, 32767), "fleet size S [UAVs] (an int16 column)")
     soh_min: float = _p("fleet", 0.5, float, _FRACTION,
                         "lower bound of the uniform state of health [fraction of capacity]")
     soh_max: float = _p("fleet", 1.0, float, _FRACTION,
                         "upper bound of the uniform state of health [fraction of capacity]")
     # [energy]
-    frame_mass_kg: float = _p("energy", 10.0, float, _NON_NEGATIVE, "frame mass m_f [kg]")
-    battery_mass_kg: float = _p("energy", 10.0, float, _NON_NEGATIVE, "battery mass m_b [kg]")
-    n_rotors: int = _p("energy", 8, int, _AT_LEAST_ONE, "number of rotors n_r")
-    rotor_area_m2: float = _p("energy", 0.27, float, _POSITIVE, "rotor disc area zeta [m^2]")
-    air_density_kg_m3: float = _p("energy", 1.225, float, _POSITIVE, "air density rho [kg/m^3]")
-    gravity_m_s2: float = _p("energy", 9.81, float, _POSITIVE,
+    frame_mass_kg: float = _p("energy", 10.0, float, _MASS_KG, "frame mass m_f [kg]")
+    battery_mass_kg: float = _p("energy", 10.0, float, _MASS_KG, "battery mass m_b [kg]")
+    n_rotors: int = _p("energy", 8, int, Interval(1, 1000), "number of rotors n_r")
+    rotor_area_m2: float = _p("energy", 0.27, float, Interval(0, 1e4, "right"), "rotor disc area zeta [m^2]")
+    air_density_kg_m3: float = _p("energy", 1.225, float, Interval(0, 100, "right"), "air density rho [kg/m^3]")
+    gravity_m_s2: float = _p("energy", 9.81, float, Interval(0, 100, "right"),
                              "gravitational acceleration g [m/s^2]")
-    speed_m_s: float = _p("energy", 10.0, float, _POSITIVE, "cruise speed v [m/s]")
-    capacity_wh: float = _p("energy", 800.0, float, _POSITIVE,
+    speed_m_s: float = _p("energy", 10.0, float, Interval(0, 1e4, "right"), "cruise speed v [m/s]")
+    # Physical ranges, wide enough for any UAV, keep charging times finite and bounded.
+    capacity_wh: float = _p("energy", 800.0, float, Interval(1, 1e6),
                             "theoretical battery capacity C [Wh]")
-    charger_power_w: float = _p("energy", 100.0, float, _POSITIVE, "charger power P_c [W]")
-    charger_efficiency: float = _p("energy", 0.95, float, _FRACTION,
+    charger_power_w: float = _p("energy", 100.0, float, Interval(1, 1e6), "charger power P_c [W]")
+    charger_efficiency: float = _p("energy", 0.95, float, Interval(0.01, 1),
                                    "charger efficiency gamma [fraction]")
     xi: float = _p("energy", 0.5, float, Interval(0, 1, "left"),
                    "abort threshold xi [fraction of take-off SoC]")
@@ -241,20 +259,20 @@ class Config:
                         "rule that resolves the immediate bids under 'reservation'")
     theta: float = _p("auction", 50.0, float, Interval(0, 100, "both"),
                       "SoC threshold of the 'threshold' rule [%]")
-    advert_interval_s: float = _p("auction", 2.0, float, _POSITIVE,
+    advert_interval_s: float = _p("auction", 2.0, float, Interval(1e-3, None),
                                   "advertising period Delta of the FC [s]")
     # [policy]
-    alpha: float = _p("policy", 0.01, float, _POSITIVE,
+    alpha: float = _p("policy", 0.01, float, Interval(0, 100, "right"),
                       "L2 regularisation strength of the SGD learner")
     eta0: float = _p("policy", 0.01, float, _POSITIVE,
                      "initial learning rate eta0 of the SGD learner")
     initial_epochs: int = _p("policy", 7, int, _AT_LEAST_ONE,
                              "epochs of the initial fit on the two assumed points")
     scaler_mean: tuple[float, float, float] = _p(
-        "policy", (3500.0, 2.75, 50.0), tuple, Interval(None, None),
+        "policy", (3500.0, 2.75, 50.0), tuple, Interval(-1e9, 1e9),
         "standardisation mean of the features (distance [m], mass [kg], SoC [%])", length=3)
     scaler_std: tuple[float, float, float] = _p(
-        "policy", (1443.38, 1.298, 28.87), tuple, _POSITIVE,
+        "policy", (1443.38, 1.298, 28.87), tuple, Interval(1e-6, 1e9),
         "standardisation std of the features (distance [m], mass [kg], SoC [%])", length=3)
 
     def __post_init__(self):
@@ -294,12 +312,65 @@ for _name, _param in PARAMETERS.items():
     SECTIONS[_param.section] += (_name,)
 del _name, _param
 
-# Cross-parameter rules, all of them: (lower, upper) must satisfy lower <= upper.
+# Cross-parameter rules, all of them: (lower, upper) must satisfy lower <= upper, and
+# the run's size must stay within RUN_LIMITS (below).
 _ORDERED_PAIRS: tuple[tuple[str, str], ...] = (
     ("mass_min_kg", "mass_max_kg"),
     ("distance_min_m", "distance_max_m"),
     ("soh_min", "soh_max"),
 )
+
+
+#: Limits on the size of a run, checked with the other cross-parameter rules (see
+#: :func:`run_size`): whatever drives memory or time is refused up front, never met as a
+#: MemoryError or a hang. Each is far above the paper's runs (8 weeks, tau 15 min: ~5.4e3
+#: orders, 2.4e6 ticks) and a 10,000-UAV fleet (tau 15 min x 25 / 10,000: ~2.2e6 orders).
+RUN_LIMITS: dict[str, float] = {
+    "orders": 1e7,        # expected orders; ~300 B each (order book, draws, table): ~3 GB
+    "samples": 1e7,       # time-series samples; ~150 B each
+    "advert_ticks": 3e7,  # each tick scans the fleet and may launch an attempt (~250 B)
+    "fleet_rows": 1e7,    # UAVs x (week ends + 1) rows of fleet snapshots; ~200 B each
+    "fit_draws": 1e7,     # initial fit: one permutation drawn per UAV and epoch (~2 us each)
+}
+
+
+def run_size(config: Any) -> dict[str, float]:
+    """Expected size of a run of ``config`` (a Config or a flat mapping), as counted by RUN_LIMITS.
+
+    ``orders`` = horizon / tau (expected), ``samples`` = horizon / record_interval + 1,
+    ``advert_ticks`` = horizon / advert_interval (at most; ticks with nobody to bid are
+    skipped), ``fleet_rows`` = n_uavs x (week ends + 1), ``fit_draws`` = n_uavs x initial_epochs.
+    """
+    v = config if isinstance(config, Mapping) else {name: getattr(config, name) for name in PARAMETERS}
+    horizon_s = v["horizon_weeks"] * SECONDS_PER_WEEK
+    return {
+        "orders": horizon_s / (v["tau_minutes"] * SECONDS_PER_MINUTE),
+        "samples": math.floor(horizon_s / v["record_interval_s"]) + 1.0,
+        "advert_ticks": horizon_s / v["advert_interval_s"],
+        "fleet_rows": v["n_uavs"] * (math.ceil(v["horizon_weeks"]) + 1.0),
+        "fit_draws": float(v["n_uavs"] * v["initial_epochs"]),
+    }
+
+
+# What each size counts, for the message: (noun, the parameters it comes from, how).
+_RUN_SIZE_TERMS: dict[str, tuple[str, tuple[str, str], str]] = {
+    "orders": ("orders", ("horizon_weeks", "tau_minutes"), "horizon {} weeks / tau {} min"),
+    "samples": ("time-series samples", ("horizon_weeks", "record_interval_s"),
+                "horizon {} weeks / record_interval_s {} s"),
+    "advert_ticks": ("advertisement ticks", ("horizon_weeks", "advert_interval_s"),
+                     "horizon {} weeks / advert_interval_s {} s"),
+    "fleet_rows": ("fleet snapshot rows", ("n_uavs", "horizon_weeks"), "n_uavs {} x (horizon {} weeks + 1)"),
+    "fit_draws": ("initial-fit draws", ("n_uavs", "initial_epochs"), "n_uavs {} x initial_epochs {}"),
+}
+
+
+def _check_run_size(values: Mapping[str, Any]) -> None:
+    for name, size in run_size(values).items():
+        limit = RUN_LIMITS[name]
+        if size > limit:
+            noun, keys, how = _RUN_SIZE_TERMS[name]
+            how = how.format(*(_num(values[k]) for k in keys))
+            raise ConfigError(f"the run would hold ~{size:.3g} {noun} ({how}); at most {limit:g} allowed", keys)
 
 
 # --------------------------------------------------------------------------
@@ -308,7 +379,17 @@ _ORDERED_PAIRS: tuple[tuple[str, str], ...] = (
 
 
 def _show(value: Any) -> str:
-    return repr(value)
+    """repr of a value, cut to 60 characters: a message never prints a whole big value."""
+    try:
+        text = repr(value)
+    except ValueError:  # an int too long to print (sys.get_int_max_str_digits)
+        return f"an integer of {value.bit_length()} bits"
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _name(name: str) -> str:
+    """A key or section name for a message: as written if printable and short, else its cut repr."""
+    return name if name.isprintable() and len(name) <= 60 else _show(name)
 
 
 def _type_name(value: Any) -> str:
@@ -323,7 +404,10 @@ def _check_float(qualname: str, name: str, value: Any, interval: Interval) -> fl
     if not _is_number(value):
         raise ConfigError(f"{qualname} must be a number, got {_type_name(value)} {_show(value)}",
                           [name])
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an int beyond any float
+        x = math.inf
     if not math.isfinite(x):
         raise ConfigError(f"{qualname} = {_show(value)} is not a finite number", [name])
     if x not in interval:
@@ -369,7 +453,8 @@ def _validate(values: Mapping[str, Any]) -> dict[str, Any]:
     """Check a complete flat ``name -> value`` mapping; return it normalised.
 
     The only validation function: types and ranges of every parameter, in
-    declaration order, then the cross-parameter rules.
+    declaration order, then the cross-parameter rules: ordered pairs, then the
+    size of the run (:data:`RUN_LIMITS`).
     """
     out = {name: _check_one(PARAMETERS[name], values[name]) for name in PARAMETERS}
     for lo, hi in _ORDERED_PAIRS:
@@ -377,6 +462,7 @@ def _validate(values: Mapping[str, Any]) -> dict[str, Any]:
             plo, phi = PARAMETERS[lo], PARAMETERS[hi]
             raise ConfigError(f"{plo.qualname} = {_show(values[lo])} must be <= "
                               f"{phi.qualname} = {_show(values[hi])}", [lo, hi])
+    _check_run_size(out)
     return out
 
 
@@ -408,18 +494,22 @@ def _flatten(d: Any, where: str | None = None,
         raise ConfigError(f"{pre}expected a table of sections, got {_type_name(d)}")
     flat: dict[str, Any] = {}
     for section, table in d.items():
+        if not isinstance(section, str):
+            raise ConfigError(f"{pre}a section name must be a string, got {_type_name(section)} {_show(section)}")
         if section not in SECTIONS:
             if section in PARAMETERS:
                 raise ConfigError(
                     f"{pre}key {section!r} is at the top level; put it in section "
                     f"[{PARAMETERS[section].section}]", [section])
             raise ConfigError(
-                f"{pre}unknown section [{section}]{_suggest(section, SECTIONS)}. "
+                f"{pre}unknown section [{_name(section)}]{_suggest(section, SECTIONS)}. "
                 f"Allowed sections: {', '.join(SECTIONS)}")
         if not isinstance(table, Mapping):
             raise ConfigError(f"{pre}[{section}] must be a table of key = value, "
                               f"got {_type_name(table)} {_show(table)}")
         for key, value in table.items():
+            if not isinstance(key, str):
+                raise ConfigError(f"{pre}a key of [{section}] must be a string, got {_type_name(key)} {_show(key)}")
             if key not in SECTIONS[section]:
                 raise ConfigError(f"{pre}{_unknown_key_message(section, key)}")
             flat[key] = value
@@ -432,12 +522,12 @@ def _unknown_key_message(section: str, key: str) -> str:
     if key in PARAMETERS:
         return (f"{section}.{key} is not a key of [{section}]; {key} belongs in "
                 f"[{PARAMETERS[key].section}]")
-    return (f"unknown key {section}.{key}{_suggest(key, SECTIONS[section])}. "
+    return (f"unknown key {section}.{_name(key)}{_suggest(key, SECTIONS[section])}. "
             f"Allowed keys in [{section}]: {', '.join(SECTIONS[section])}")
 
 
 def _unknown_name_message(name: str) -> str:
-    return f"unknown key {name!r}{_suggest(name, PARAMETERS)}. Allowed keys: {', '.join(PARAMETERS)}"
+    return f"unknown key {_show(name)}{_suggest(name, PARAMETERS)}. Allowed keys: {', '.join(PARAMETERS)}"
 
 
 def resolve_key(key: str) -> str:
@@ -445,7 +535,7 @@ def resolve_key(key: str) -> str:
     if "." in key:
         section, _, name = key.partition(".")
         if section not in SECTIONS:
-            raise ConfigError(f"unknown section {section!r} in {key!r}"
+            raise ConfigError(f"unknown section {_show(section)} in {_show(key)}"
                               f"{_suggest(section, SECTIONS)}. "
                               f"Allowed sections: {', '.join(SECTIONS)}")
         if name not in SECTIONS[section]:
@@ -459,16 +549,16 @@ def resolve_key(key: str) -> str:
 def _parse_override(text: Any) -> tuple[str, Any]:
     """'key=value' -> (parameter name, value); value read as TOML, else a bare string."""
     if not isinstance(text, str) or "=" not in text:
-        raise ConfigError(f"--set needs key=value, got {text!r}")
+        raise ConfigError(f"--set needs key=value, got {_show(text)}")
     key, _, raw = text.partition("=")
     key, raw = key.strip(), raw.strip()
     if not key:
-        raise ConfigError(f"--set needs key=value, got {text!r}")
+        raise ConfigError(f"--set needs key=value, got {_show(text)}")
     name = resolve_key(key)
     try:
         doc = tomllib.loads(f"v = {raw}")
         value = doc["v"] if list(doc) == ["v"] else raw
-    except tomllib.TOMLDecodeError:
+    except (ValueError, RecursionError):  # not a TOML value (TOMLDecodeError, huge int): a bare string
         value = raw
     return name, value
 
@@ -502,6 +592,29 @@ def config_from_dict(d: Mapping[str, Any]) -> Config:
     return Config(**_flatten(d))
 
 
+def _read_toml(path: str | PathLike) -> dict[str, Any]:
+    """The TOML document in ``path``; ConfigError if unreadable, too big, not UTF-8 or not TOML."""
+    where = f"config file {str(path)!r}"
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the path may be a device or a pipe
+    except OSError as e:
+        raise ConfigError(f"cannot read {where}: {e.strerror or e}") from None
+    if len(data) > MAX_CONFIG_BYTES:
+        raise ConfigError(f"{where} is larger than {MAX_CONFIG_BYTES} bytes; a config file is a few KB of TOML")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ConfigError(f"{where} is not UTF-8 text (byte {data[e.start]:#04x} at offset {e.start}); "
+                          "save it as UTF-8") from None
+    try:
+        return tomllib.loads(text)
+    except ValueError as e:  # TOMLDecodeError, or an integer of too many digits
+        raise ConfigError(f"cannot parse {where}: {e}") from None
+    except RecursionError:
+        raise ConfigError(f"cannot parse {where}: values nested too deeply") from None
+
+
 def load_config(path: str | PathLike | None = None,
                 overrides: Iterable[str] = (),
                 seed: int | None = None) -> Config:
@@ -521,24 +634,18 @@ def load_config(path: str | PathLike | None = None,
     Raises
     ------
     ConfigError
-        For any problem, before anything else happens: unreadable file or TOML
-        syntax error (naming the file), unknown section or key, malformed
-        override, wrong type, out-of-range value, violated cross rule.
+        For any problem, before anything else happens: unreadable, too large
+        or non-UTF-8 file or TOML syntax error (naming the file), unknown
+        section or key, malformed override, wrong type, out-of-range value
+        (``seed`` in [0, 2**63 - 1]), violated cross rule, a run larger than
+        :data:`RUN_LIMITS`.
     """
     origin: dict[str, str] = {}
     # Overrides first: a malformed --set is reported even if the file is also bad.
     parsed = [(_parse_override(o), o) for o in overrides]
     flat: dict[str, Any] = {}
     if path is not None:
-        try:
-            with open(path, "rb") as fh:
-                doc = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as e:
-            raise ConfigError(f"cannot parse config file {str(path)!r}: {e}") from None
-        except OSError as e:
-            raise ConfigError(f"cannot read config file {str(path)!r}: "
-                              f"{e.strerror or e}") from None
-        flat.update(_flatten(doc, str(path), origin))
+        flat.update(_flatten(_read_toml(path), str(path), origin))
     for (name, value), text in parsed:
         flat[name] = value
         origin[name] = f"--set {text}"

@@ -13,6 +13,7 @@ leaves the other supervisors where they are.
   controllers (input checks, callbacks, random choice of a controllable event).
 """
 
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,7 +22,20 @@ import numpy as np
 import yaml
 from numba import njit
 
+from .config import ConfigError
+
 BUILTIN_CONTROLLER = Path(__file__).parent / "data" / "uav-delivery-controller.yaml"
+
+#: Largest supervisor file read [bytes]. Real Nadzoru 2 files are a few KB (the largest
+#: known, ~15 KB); the cap keeps parsing to about a second (libyaml: ~4 s per MB).
+MAX_FILE_BYTES = 256_000
+#: Deepest nesting of lists and mappings read (Nadzoru 2 files nest 3 deep: a mapping of lists of lists).
+MAX_DEPTH = 20
+#: Largest dense transition table built (K x states x events entries, int64): ~80 MB.
+MAX_TABLE_ENTRIES = 10_000_000
+
+# libyaml's parser when PyYAML was built with it (much faster); the pure-Python one otherwise.
+_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 _PREFIX = "EV_"
 
@@ -38,8 +52,11 @@ _REQUIRED_KEYS = (
 )
 
 
-class SupervisorFileError(ValueError):
-    """A supervisor file (or an event name asked of it) is not what Nadzoru 2 writes."""
+class SupervisorFileError(ConfigError):
+    """A supervisor file (or an event name asked of it) is not what Nadzoru 2 writes.
+
+    A ConfigError (so a ValueError): bad input, which the command line reports in one line.
+    """
 
 
 class SupervisorError(RuntimeError):
@@ -123,9 +140,15 @@ class Automaton:
         Raises
         ------
         SupervisorFileError
-            If a name is not an event of the automaton.
+            If a name is not an event of the automaton, or the table would have more
+            than MAX_TABLE_ENTRIES entries.
         """
         columns = [self.event_index(name) for name in events]
+        size = self.n_supervisors * max(self.n_states) * len(columns)
+        if size > MAX_TABLE_ENTRIES:
+            raise SupervisorFileError(
+                f"the transition table would have {size} entries ({self.n_supervisors} supervisors x "
+                f"{max(self.n_states)} states x {len(columns)} events); at most {MAX_TABLE_ENTRIES} allowed")
         table = np.full((self.n_supervisors, max(self.n_states), len(columns)), -1, dtype=np.int64)
         for k, n in enumerate(self.n_states):
             for c, e in enumerate(columns):
@@ -144,6 +167,69 @@ def _error(path, message):
     return SupervisorFileError(f"{path}: {message}")
 
 
+def _show(value):
+    """A value for a message: its repr cut to 60 characters, never a whole parsed structure."""
+    try:
+        text = repr(value)
+    except ValueError:  # an int too long to print (sys.get_int_max_str_digits)
+        return f"an integer of {value.bit_length()} bits"
+    return text if len(text) <= 60 else f"{text[:57]}... ({type(value).__name__})"
+
+
+def _read_yaml(path):
+    """The YAML document of ``path``, refused unless it is a UTF-8 file of at most MAX_FILE_BYTES.
+
+    The events are scanned before anything is built: aliases are refused (Nadzoru 2 never
+    writes them, and a few nested ones expand to billions of nodes, the "billion laughs"),
+    and so is nesting deeper than MAX_DEPTH (the compiled YAML composer recurses in C).
+    """
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)  # read no further: the path may be a device or a pipe
+    except OSError as exc:
+        raise _error(path, f"cannot read the supervisor file: {exc.strerror or exc}") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise _error(path, f"is larger than {MAX_FILE_BYTES} bytes; a Nadzoru 2 file is a few KB")
+    if not data.strip():
+        raise _error(path, "is empty; a Nadzoru 2 file is a YAML mapping")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise _error(path, f"is not UTF-8 text (byte {data[exc.start]:#04x} at offset {exc.start})") from None
+    try:
+        problem = _structure_problem(yaml.parse(text, Loader=_Loader))
+        if problem is None:
+            return yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        raise _error(path, f"not valid YAML: {_one_line(exc)}") from None
+    except ValueError as exc:  # a value YAML reads but Python refuses (an integer of too many digits)
+        raise _error(path, f"not valid YAML: {_one_line(exc)}") from None
+    raise _error(path, problem)
+
+
+def _structure_problem(events):
+    """Why a stream of YAML events must not be built (an alias, deep nesting), or None."""
+    depth = 0
+    for event in events:
+        if isinstance(event, yaml.AliasEvent):
+            mark = event.start_mark
+            where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+            return f"uses a YAML alias{where}; aliases are not allowed (Nadzoru 2 writes none)"
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_DEPTH:
+                return f"nests lists or mappings more than {MAX_DEPTH} deep; a Nadzoru 2 file nests 3"
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
+    return None
+
+
+def _one_line(exc):
+    """An exception's message on one line, cut to 200 characters."""
+    text = " ".join(str(exc).split())
+    return text if len(text) <= 200 else text[:197] + "..."
+
+
 def _is_int(value):
     # YAML booleans are Python ints too; a flag written as `true` is not what Nadzoru writes.
     return isinstance(value, int) and not isinstance(value, bool)
@@ -152,7 +238,7 @@ def _is_int(value):
 def _sized_list(path, doc, key, size, size_key):
     value = doc[key]
     if not isinstance(value, list):
-        raise _error(path, f"{key} should be a list of {size} entries ({size_key}), found {value!r}")
+        raise _error(path, f"{key} should be a list of {size} entries ({size_key}), found {_show(value)}")
     if len(value) != size:
         raise _error(path, f"{key} has {len(value)} entries but {size_key} is {size}")
     return value
@@ -161,14 +247,14 @@ def _sized_list(path, doc, key, size, size_key):
 def _flags(path, values, where):
     for i, value in enumerate(values):
         if not _is_int(value) or value not in (0, 1):
-            raise _error(path, f"{where}[{i}] should be 0 or 1, found {value!r}")
+            raise _error(path, f"{where}[{i}] should be 0 or 1, found {_show(value)}")
     return np.array(values, dtype=bool)
 
 
 def _count(path, doc, key):
     value = doc[key]
     if not _is_int(value) or value < 1:
-        raise _error(path, f"{key} should be a positive integer, found {value!r}")
+        raise _error(path, f"{key} should be a positive integer, found {_show(value)}")
     return value
 
 
@@ -176,7 +262,7 @@ def _state_indices(path, doc, key, n_supervisors):
     values = _sized_list(path, doc, key, n_supervisors, "num_supervisors")
     for k, value in enumerate(values):
         if not _is_int(value) or value < 0:
-            raise _error(path, f"{key}[{k}] should be a state index (integer >= 0), found {value!r}")
+            raise _error(path, f"{key}[{k}] should be a state index (integer >= 0), found {_show(value)}")
     return values
 
 
@@ -184,7 +270,7 @@ def _block_ends(path, positions, data_length):
     """End offset (exclusive) of each supervisor's block in sup_data."""
     for k, pos in enumerate(positions):
         if not _is_int(pos):
-            raise _error(path, f"sup_data_pos[{k}] should be an integer offset, found {pos!r}")
+            raise _error(path, f"sup_data_pos[{k}] should be an integer offset, found {_show(pos)}")
     if positions[0] != 0:
         raise _error(path, f"sup_data_pos[0] should be 0 (the first block starts sup_data), found {positions[0]}")
     for k in range(1, len(positions)):
@@ -214,7 +300,7 @@ def _walk_block(path, data, k, start, end, event_index, alphabet_k):
         n_out = data[i]
         if not _is_int(n_out) or n_out < 0:
             raise _error(path, f"sup_data[{i}] (supervisor {k}, state {s}) should be n_out, the number of "
-                               f"outgoing transitions (integer >= 0), found {n_out!r}")
+                               f"outgoing transitions (integer >= 0), found {_show(n_out)}")
         if i + 1 + 3 * n_out > end:
             raise _error(path, f"sup_data truncated or bad n_out: supervisor {k}, state {s} at sup_data[{i}] "
                                f"has n_out = {n_out}, which needs {3 * n_out} entries after it, but its block "
@@ -223,17 +309,17 @@ def _walk_block(path, data, k, start, end, event_index, alphabet_k):
         for j in range(i + 1, i + 1 + 3 * n_out, 3):
             name, hi, lo = data[j:j + 3]
             if not isinstance(name, str) or name not in event_index:
-                raise _error(path, f"sup_data[{j}] (supervisor {k}, state {s}): event {name!r} is not in events")
+                raise _error(path, f"sup_data[{j}] (supervisor {k}, state {s}): event {_show(name)} is not in events")
             e = event_index[name]
             if not alphabet_k[e]:
-                raise _error(path, f"sup_data[{j}] (supervisor {k}, state {s}): event {name!r} is not in "
+                raise _error(path, f"sup_data[{j}] (supervisor {k}, state {s}): event {_show(name)} is not in "
                                    f"supervisor {k}'s alphabet (sup_events[{k}])")
             if e in out:
                 raise _error(path, f"sup_data[{j}] (supervisor {k}, state {s}): second transition on event "
-                                   f"{name!r}; a supervisor is deterministic")
+                                   f"{_show(name)}; a supervisor is deterministic")
             if not (_is_int(hi) and _is_int(lo) and hi >= 0 and 0 <= lo < 256):
-                raise _error(path, f"sup_data[{j + 1}:{j + 3}] (supervisor {k}, state {s}, event {name!r}) "
-                                   f"should be target_hi >= 0 and 0 <= target_lo < 256, found {hi!r}, {lo!r}")
+                raise _error(path, f"sup_data[{j + 1}:{j + 3}] (supervisor {k}, state {s}, event {_show(name)}) "
+                                   f"should be target_hi >= 0 and 0 <= target_lo < 256, found {_show(hi)}, {_show(lo)}")
             out[e] = (hi * 256 + lo, name, j)
         states.append(out)
         i += 1 + 3 * n_out
@@ -258,16 +344,16 @@ def load_supervisor(path) -> Automaton:
     Raises
     ------
     SupervisorFileError
-        On a missing key, a list whose length disagrees with ``num_events`` /
-        ``num_supervisors``, an unknown event in ``sup_data``, a dangling
-        target, an out-of-range state, or a truncated ``sup_data``. The message
-        names the file, what is at fault and what was expected.
+        On a file that is missing, unreadable, larger than MAX_FILE_BYTES, empty,
+        not UTF-8, not YAML or using YAML aliases; on a missing key, a list whose
+        length disagrees with ``num_events`` / ``num_supervisors``, an unknown
+        event in ``sup_data``, a dangling target, an out-of-range state, or a
+        truncated ``sup_data``. The message is one line; it names the file, what
+        is at fault and what was expected, and shows at most 60 characters of a
+        value.
     """
     path = Path(path)
-    try:
-        doc = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise _error(path, f"not valid YAML: {exc}") from exc
+    doc = _read_yaml(path)
     if not isinstance(doc, dict):
         raise _error(path, f"should be a mapping with keys {', '.join(_REQUIRED_KEYS)}")
     missing = [key for key in _REQUIRED_KEYS if key not in doc]
@@ -281,10 +367,10 @@ def load_supervisor(path) -> Automaton:
     names = _sized_list(path, doc, "events", n_events, "num_events")
     for i, name in enumerate(names):
         if not isinstance(name, str) or not name.startswith(_PREFIX) or name == _PREFIX:
-            raise _error(path, f"events[{i}] should be a name starting with {_PREFIX!r}, found {name!r}")
+            raise _error(path, f"events[{i}] should be a name starting with {_PREFIX!r}, found {_show(name)}")
     event_index = {name: i for i, name in enumerate(names)}
     if len(event_index) != n_events:
-        duplicated = sorted({name for name in names if names.count(name) > 1})
+        duplicated = sorted(name for name, count in Counter(names).items() if count > 1)
         raise _error(path, f"events repeats {', '.join(duplicated)}")
 
     controllable = _flags(path, _sized_list(path, doc, "ev_controllable", n_events, "num_events"),
@@ -299,7 +385,7 @@ def load_supervisor(path) -> Automaton:
     alphabet = np.zeros((n_supervisors, n_events), dtype=bool)
     for k, row in enumerate(rows):
         if not isinstance(row, list) or len(row) != n_events:
-            raise _error(path, f"sup_events[{k}] should be a list of {n_events} flags (num_events), found {row!r}")
+            raise _error(path, f"sup_events[{k}] should be a list of {n_events} flags (num_events), found {_show(row)}")
         alphabet[k] = _flags(path, row, f"sup_events[{k}]")
 
     init_state = _state_indices(path, doc, "sup_init_state", n_supervisors)
@@ -307,7 +393,7 @@ def load_supervisor(path) -> Automaton:
     positions = _sized_list(path, doc, "sup_data_pos", n_supervisors, "num_supervisors")
     data = doc["sup_data"]
     if not isinstance(data, list):
-        raise _error(path, f"sup_data should be a list, found {data!r}")
+        raise _error(path, f"sup_data should be a list, found {_show(data)}")
 
     # A block runs from its sup_data_pos to the next one (or the end): walking it
     # is the only way to learn how many states a supervisor has.
@@ -321,7 +407,7 @@ def load_supervisor(path) -> Automaton:
             for target, name, j in out.values():
                 if target >= n:
                     raise _error(path, f"dangling target at sup_data[{j}]: supervisor {k}, state {s}, event "
-                                       f"{name!r} goes to state {target}, but supervisor {k} has {n} states "
+                                       f"{_show(name)} goes to state {target}, but supervisor {k} has {n} states "
                                        f"(0..{n - 1})")
         for key, values in (("sup_init_state", init_state), ("sup_current_state", current_state)):
             if values[k] >= n:

@@ -254,16 +254,26 @@ def test_wrong_type(key, value, fragment):
     ("soh_max", 0.0, "(0, 1]"),
     ("xi", 1.0, "[0, 1)"),
     ("xi", -0.1, "[0, 1)"),
-    ("n_uavs", 0, ">= 1"),
-    ("speed_m_s", -10.0, "> 0"),
+    ("n_uavs", 0, "[1, 32767]"),
+    ("n_uavs", 32768, "[1, 32767]"),
+    ("speed_m_s", -10.0, "(0, 10000]"),
+    ("speed_m_s", 1e300, "(0, 10000]"),
     ("theta", 101, "[0, 100]"),
     ("theta", -1.0, "[0, 100]"),
-    ("charger_efficiency", 1.01, "(0, 1]"),
-    ("seed", -1, ">= 0"),
-    ("mass_min_kg", -0.5, ">= 0"),
-    ("distance_min_m", 0.0, "> 0"),
-    ("horizon_weeks", 0.0, "> 0"),
-    ("scaler_std", [1.0, 0.0, 1.0], "> 0"),
+    ("charger_efficiency", 1.01, "[0.01, 1]"),
+    ("charger_efficiency", 1e-300, "[0.01, 1]"),
+    ("seed", -1, "[0, 9223372036854775807]"),
+    ("seed", 2**63, "[0, 9223372036854775807]"),
+    ("charger_power_w", 1e-300, "[1, 1e+06]"),
+    ("capacity_wh", 1e7, "[1, 1e+06]"),
+    ("advert_interval_s", 1e-6, ">= 0.001"),
+    ("mass_min_kg", -0.5, "[0, 10000]"),
+    ("frame_mass_kg", 1e300, "[0, 10000]"),
+    ("distance_min_m", 0.0, "(0, 1e+07]"),
+    ("alpha", 1e300, "(0, 100]"),
+    ("horizon_weeks", 0.0, "(0, 1000]"),
+    ("horizon_weeks", 1e6, "(0, 1000]"),
+    ("scaler_std", [1.0, 0.0, 1.0], "[1e-06, 1e+09]"),
 ])
 def test_out_of_range(key, value, allowed):
     with pytest.raises(ConfigError) as e:
@@ -412,3 +422,27 @@ def test_to_json_deterministic():
     assert text == json.dumps(json.loads(text), sort_keys=True)
     assert text.index('"auction"') < text.index('"run"')
     assert default_config().to_json() != text
+
+
+# A run's size: each RUN_LIMITS term just below its limit is accepted, just above refused.
+_QUIET = {"tau_minutes": 1e6, "record_interval_s": 1e6, "advert_interval_s": 1e4}  # every other term small
+_SIZE_KNOBS = {
+    "orders": lambda x: {"horizon_weeks": 8.0, "tau_minutes": 8 * 604800.0 / 60.0 / x},
+    "samples": lambda x: {"horizon_weeks": 8.0, "record_interval_s": 8 * 604800.0 / (x - 1.0)},
+    "advert_ticks": lambda x: {"horizon_weeks": 8.0, "advert_interval_s": 8 * 604800.0 / x},
+    "fleet_rows": lambda x: {"n_uavs": 20000, "horizon_weeks": math.floor(x / 20000) - 1.0},
+    "fit_draws": lambda x: {"n_uavs": 1000, "initial_epochs": int(x // 1000)},
+}
+
+
+@pytest.mark.parametrize("term", sorted(_SIZE_KNOBS))
+def test_run_size_limits_refuse_just_above_and_accept_at_the_limit(term):
+    from dronefleet.config import RUN_LIMITS, run_size
+
+    limit = RUN_LIMITS[term]
+    at = replace(default_config(), **{**_QUIET, **_SIZE_KNOBS[term](limit)})
+    assert run_size(at)[term] == pytest.approx(limit, rel=1e-9)
+    with pytest.raises(ConfigError) as e:
+        replace(default_config(), **{**_QUIET, **_SIZE_KNOBS[term](1.02 * limit)})
+    assert str(e.value).startswith(f"the run would hold ~{1.02 * limit:.3g} ")
+    assert str(e.value).endswith(f"; at most {limit:g} allowed")

@@ -114,7 +114,8 @@ def test_changes_and_seeds_make_a_variant_of_a_sweep_file():
     (GOOD + "[set]\nn_uavs = 2.5\n", "[set]: fleet.n_uavs must be an integer"),
     (GOOD.replace("seeds = [0, 1]", "seeds = []"), "give a non-empty list"),
     (GOOD.replace("seeds = [0, 1]", "seeds = [0, 0]"), "seed 0 is listed more than once"),
-    (GOOD.replace("seeds = [0, 1]", "seeds = [-1]"), "[sweep] seeds: run.seed = -1 is out of range: allowed >= 0"),
+    (GOOD.replace("seeds = [0, 1]", "seeds = [-1]"),
+     "[sweep] seeds: run.seed = -1 is out of range: allowed [0, 9223372036854775807]"),
     (GOOD.replace("seeds = [0, 1]", "seeds = [0.5]"), "[sweep] seeds: run.seed must be an integer, got float"),
     (GOOD.replace("seeds = [0, 1]", "seeds = { start = 3 }"), "a range is { start = <integer>, count = <integer >= 1> }"),
     (GOOD.replace("seeds = [0, 1]", "seeds = { start = -2, count = 3 }"), "run.seed = -2 is out of range"),
@@ -137,7 +138,8 @@ def test_bad_sweep_files_are_refused_before_any_run(tmp_path, capsys, text, mess
 
 
 def test_partition_values_round_trip_through_their_text():
-    config = replace(default_config(), fleet_file="fleets/a b,{seed}=1%.parquet", tau_minutes=1e-5, seed=12)
+    config = replace(default_config(), fleet_file="fleets/a b,{seed}=1%.parquet", tau_minutes=1e-5, horizon_weeks=0.001,
+                     seed=12)
     run = sw.Run(config, ("fleet_file", "tau_minutes", "n_uavs", "seed"))
     assert run.partition == "fleet_file=fleets%2Fa%20b%2C%7Bseed%7D%3D1%25.parquet/tau_minutes=1e-05/n_uavs=25/seed=12"
     assert "/" not in run.id and run.id.count(",") == 3

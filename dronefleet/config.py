@@ -239,8 +239,8 @@ class Config:
     frame_mass_kg: float = _p("energy", 10.0, float, _MASS_KG, "frame mass m_f [kg]")
     battery_mass_kg: float = _p("energy", 10.0, float, _MASS_KG, "battery mass m_b [kg]")
     n_rotors: int = _p("energy", 8, int, Interval(1, 1000), "number of rotors n_r")
-    rotor_area_m2: float = _p("energy", 0.27, float, Interval(0, 1e4, "right"), "rotor disc area zeta [m^2]")
-    air_density_kg_m3: float = _p("energy", 1.225, float, Interval(0, 100, "right"), "air density rho [kg/m^3]")
+    rotor_area_m2: float = _p("energy", 0.27, float, Interval(1e-4, 1e4), "rotor disc area zeta [m^2]")
+    air_density_kg_m3: float = _p("energy", 1.225, float, Interval(0.01, 100), "air density rho [kg/m^3]")
     gravity_m_s2: float = _p("energy", 9.81, float, Interval(0, 100, "right"),
                              "gravitational acceleration g [m/s^2]")
     speed_m_s: float = _p("energy", 10.0, float, Interval(0, 1e4, "right"), "cruise speed v [m/s]")

@@ -181,6 +181,8 @@ HOSTILE = [
     ("1e9 UAVs", run_set("n_uavs=1000000000"), "fleet.n_uavs = 1000000000 is out of range: allowed [1, 32767]"),
     ("charger 1e-300 W", run_set("charger_power_w=1e-300"),
      "energy.charger_power_w = 1e-300 is out of range: allowed [1, 1e+06]"),
+    ("vanishing rotors (an infinite flight power)", run_set("rotor_area_m2=1e-300", "air_density_kg_m3=1e-300"),
+     "energy.rotor_area_m2 = 1e-300 is out of range: allowed [0.0001, 10000]"),
     ("charger efficiency 1e-300 (a hang)", run_set("charger_efficiency=1e-300"),
      "energy.charger_efficiency = 1e-300 is out of range: allowed [0.01, 1]"),
     ("threshold 0, advert 1e-6 s", run_set("rule=threshold", "theta=0", "advert_interval_s=1e-6"),

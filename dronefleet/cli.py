@@ -137,7 +137,8 @@ def run(args):
     from .fleet import load_fleet, save_fleet, seeded_path
     from .metrics import run_metrics
     from .records import write_run
-    from .simulation import simulate
+    from .simulation import InvalidStateError, simulate
+    from .supervisor import SupervisorError
 
     fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None  # refused before any work
     fleet_out = seeded_path(args.save_fleet, config.seed) if args.save_fleet else None
@@ -147,7 +148,10 @@ def run(args):
           f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
           "(the first run on a machine compiles the engine, ~15 s)", flush=True)
     start = time.perf_counter()
-    result = simulate(config, progress=ProgressBar(config.horizon_s), fleet=fleet)
+    try:
+        result = simulate(config, progress=ProgressBar(config.horizon_s), fleet=fleet)
+    except (SupervisorError, InvalidStateError) as error:  # nothing is written: the tables come after
+        raise ConfigError(f"the run stopped: {error}") from None
     wall = time.perf_counter() - start
     with _writing(out):
         write_run(result, out, overwrite=args.overwrite)

@@ -64,3 +64,19 @@ def test_progress_bar_draws_weeks_only_on_a_terminal():
     quiet = io.StringIO()
     cli.ProgressBar(8 * 604800.0, stream=quiet)(604800.0)
     assert quiet.getvalue() == ""
+
+
+@pytest.mark.parametrize("error", ["SupervisorError", "InvalidStateError"])
+def test_a_run_the_engine_stops_ends_in_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch, error):
+    from dronefleet import simulation, supervisor
+    cls = {"SupervisorError": supervisor.SupervisorError, "InvalidStateError": simulation.InvalidStateError}[error]
+
+    def stopped(*args, **kwargs):
+        raise cls("UAV 3 has a NaN event time")
+
+    monkeypatch.setattr(simulation, "simulate", stopped)
+    out = tmp_path / "run"
+    assert cli.main(["run", *SHORT, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == ["dronefleet: error: the run stopped: UAV 3 has a NaN event time"]
+    assert not out.exists() and not any(p.name.startswith(".") for p in tmp_path.iterdir())

@@ -138,6 +138,8 @@ def work_and_efficiency(runs, bounds, path, title, x, xlabel, efficiency="effici
                 ax.minorticks_off()
             else:
                 ax.set_xticks(values, [f"{v:g}" for v in values])
+            if column == efficiency:  # a ratio: the whole of [0, 1] (Fig 12's loss bound leaves it below)
+                ax.set_ylim(0.0, 1.02)
             ax.set_xlabel(xlabel)
             ax.set_ylabel(label)
             ax.grid(alpha=0.3)

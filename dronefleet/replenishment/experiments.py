@@ -28,7 +28,8 @@ from ..sweep import SweepError
 from .bounds import BoundUndefinedError, bounds
 from .params import Params, ParamsError
 
-__all__ = ["FIGURES", "CONFIG_COLUMNS", "Grid", "grid_path", "load_grid", "run_configs", "bounds_table"]
+__all__ = ["FIGURES", "CONFIG_COLUMNS", "METRIC_COLUMNS", "Grid", "grid_path", "load_grid", "config_row",
+           "run_configs", "bounds_table"]
 
 #: The study's figures whose grid is ``configs/sweeps/replenishment-<figure>.toml``.
 FIGURES = ("fig09", "fig10", "fig11", "fig12")

@@ -1,7 +1,10 @@
-"""Reproduce the study's figures (EXPERIMENTS.md, Figures 16-20): run what is missing, tidy, draw.
+"""Reproduce the study's figures (EXPERIMENTS.md, Figures 16-20; REPLENISHMENT.md, Figures 9-12).
 
 ``dronefleet reproduce FIGURE [--quick] [--jobs J] [--results DIR] [--redraw]``, FIGURE one
-of fig16..fig20 or ``all``. Each figure needs one or more sweeps of ``configs/sweeps/``:
+of fig09..fig12, fig16..fig20 or ``all``. Figures 9-12 (energy replenishment) run their grid
+``configs/sweeps/replenishment-figNN.toml`` whole (seconds) into ``runs.parquet`` (one row per
+trial) and ``bounds.parquet``: see :mod:`dronefleet.replenishment.study`. Each delivery
+figure needs one or more sweeps of ``configs/sweeps/``:
 
 ==========  ==================================================================
 sweep       runs (``--quick``: seeds 0-1, 2 weeks)
@@ -27,6 +30,7 @@ of their summaries with the table: the committed numbers re-derive exactly, or t
 command lists what differs (exit 1). It writes nothing under ``<results>``.
 """
 
+import functools
 import os
 import sys
 import tempfile
@@ -38,14 +42,17 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from . import analysis
+from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
 from .sweep import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
 
-FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
-#: The sweeps each figure reads.
+REPLENISHMENT_FIGURES = ("fig09", "fig10", "fig11", "fig12")
+DELIVERY_FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
+FIGURES = (*REPLENISHMENT_FIGURES, *DELIVERY_FIGURES)
+#: The sweeps each figure reads (the replenishment figures run their own grid).
 NEEDS = {"fig16": ("rules",), "fig17": ("rules",), "fig18": ("rules",), "fig19": ("rules", "thresholds"),
-         "fig20": ("rules", "reservations")}
+         "fig20": ("rules", "reservations"), **dict.fromkeys(REPLENISHMENT_FIGURES, ())}
 #: What --quick changes in every sweep: few seeds, a short horizon.
 QUICK_SEEDS = (0, 1)
 QUICK_CHANGES = {"horizon_weeks": 2.0}
@@ -66,6 +73,8 @@ CHECK_RUNS = {
               ("rules", "rule=least_confident,tau_minutes=30.0,seed=1")),
     "fig20": (("reservations", "rule=reservation,seed=0"),
               ("reservations", "rule=least_confident,seed=4")),
+    # Figures 9-12: two configurations each (their column values), every trial re-run.
+    **replenishment.CHECK_CONFIGS,
 }
 
 
@@ -305,8 +314,10 @@ def draw_fig20(study):
                   f"Figure 20: pending orders after {weeks} more weeks from learned fleets, by arrival week")]
 
 
-TIDY = {"fig16": tidy_fig16, "fig17": tidy_fig17, "fig18": tidy_fig18, "fig19": tidy_fig19, "fig20": tidy_fig20}
-DRAW = {"fig16": draw_fig16, "fig17": draw_fig17, "fig18": draw_fig18, "fig19": draw_fig19, "fig20": draw_fig20}
+TIDY = {"fig16": tidy_fig16, "fig17": tidy_fig17, "fig18": tidy_fig18, "fig19": tidy_fig19, "fig20": tidy_fig20,
+        **{figure: functools.partial(replenishment.tidy, figure=figure) for figure in REPLENISHMENT_FIGURES}}
+DRAW = {"fig16": draw_fig16, "fig17": draw_fig17, "fig18": draw_fig18, "fig19": draw_fig19, "fig20": draw_fig20,
+        **{figure: functools.partial(replenishment.draw, figure=figure) for figure in REPLENISHMENT_FIGURES}}
 
 
 def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, log=print):
@@ -353,6 +364,8 @@ def check(figure, results="results", quick=False, log=print):
     from .fleet import seeded_path
 
     study = Study(results, quick, jobs=1, log=log)
+    if figure in REPLENISHMENT_FIGURES:
+        return replenishment.check(study, figure)
     path = study.root / figure / "runs.parquet"
     if not path.exists():
         raise SweepError(f"{path} is missing: run dronefleet reproduce {figure}{' --quick' if quick else ''} "

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reproduce a figure of the study: ``python experiments/reproduce.py fig16|...|fig20|all [--quick]``.
+"""Reproduce a figure of the study: ``python experiments/reproduce.py fig09|...|fig20|all [--quick]``.
 
 ``experiments/figNN.py`` are links to this script that reproduce their figure
 (``python experiments/fig16.py --quick``). Same as ``dronefleet reproduce``; see

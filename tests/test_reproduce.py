@@ -14,9 +14,11 @@ pytest.importorskip("matplotlib")
 
 ROOT = Path(__file__).resolve().parent.parent
 PNGS = {"fig16": ["fig16a", "fig16b", "fig16c"], "fig17": ["fig17"], "fig18": ["fig18"],
-        "fig19": ["fig19a", "fig19b", "fig19c"], "fig20": ["fig20"]}
+        "fig19": ["fig19a", "fig19b", "fig19c"], "fig20": ["fig20"],
+        **{figure: [figure] for figure in reproduce.REPLENISHMENT_FIGURES}}
 TABLES = {"fig16": ["outcomes", "backlog"], "fig17": ["accuracy"], "fig18": ["winner_soh"],
-          "fig19": ["thresholds", "outcomes", "backlog"], "fig20": ["pending"]}
+          "fig19": ["thresholds", "outcomes", "backlog"], "fig20": ["pending"],
+          **{figure: ["runs", "bounds"] for figure in reproduce.REPLENISHMENT_FIGURES}}
 
 
 @pytest.fixture(scope="module")

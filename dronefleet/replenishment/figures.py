@@ -1,0 +1,147 @@
+"""The replenishment study's figures (REPLENISHMENT.md section 10, Figs 9-12) from tidy tables alone.
+
+Each function reads the tables :mod:`dronefleet.replenishment.experiments` writes (one
+row per trial; one row of bounds per configuration) and draws one PNG with the style of
+:mod:`dronefleet.figures` (matplotlib's default style, Agg canvas, no "Software" entry:
+the same tables give the same bytes). Nothing here imports the simulator.
+
+Colours: the fixed strategy C0, the mobile chargers C1, in every figure.
+"""
+
+from pathlib import Path
+
+import numpy as np
+
+from ..figures import _dodge, _figure
+
+COLOURS = {"fixed": "C0", "mobile": "C1"}
+LABELS = {"fixed": "fixed chargers", "mobile": "mobile chargers"}
+#: Fig 9's panels: (per-trial column, panel title, number format).
+HEATMAP_PANELS = (("work", "work W (points)", "{:.0f}"),
+                  ("energy", "total energy consumed", "{:.0f}"),
+                  ("efficiency", "efficiency (work energy / total)", "{:.3f}"),
+                  ("depleted_workers", "depleted workers (of n_w)", "{:.2f}"))
+#: Width of a configuration's column of per-trial points, as a fraction of the x axis.
+_SPREAD = 0.012
+
+
+def heatmaps(runs, path, title):
+    """Fig 9: mean W, total energy, efficiency and depleted workers over (n_m, phi), four panels.
+
+    Rows phi, columns n_m; the fixed strategy (no mobile chargers) in the "0 chargers / 0x"
+    cell, cells without a configuration blank. Each cell is written with its mean; each
+    panel has its own colour scale.
+
+    Parameters
+    ----------
+    runs : pandas.DataFrame
+        Per-trial rows: ``strategy, n_chargers, charger_capacity_factor`` and the panel columns.
+    path : str or Path
+    title : str
+
+    Returns
+    -------
+    Path
+    """
+    cells = runs.assign(phi=np.where(runs["strategy"] == "fixed", 0.0, runs["charger_capacity_factor"]))
+    means = cells.groupby(["phi", "n_chargers"])[[c for c, _, _ in HEATMAP_PANELS]].mean()
+    trials = int(runs.groupby(["strategy", "n_chargers", "charger_capacity_factor"]).size().max())
+    with _figure(path, title, (12.0, 9.0), nrows=2, ncols=2) as (mpl, fig, axes):
+        for ax, (column, label, fmt) in zip(axes.flat, HEATMAP_PANELS):
+            grid = means[column].unstack("n_chargers")
+            values = grid.to_numpy()
+            image = ax.imshow(np.ma.masked_invalid(values), origin="lower", cmap="viridis", aspect="auto")
+            low, high = np.nanmin(values), np.nanmax(values)
+            for (i, j), value in np.ndenumerate(values):
+                if np.isfinite(value):
+                    bright = high > low and (value - low) / (high - low) > 0.6
+                    ax.text(j, i, fmt.format(value), ha="center", va="center", fontsize=7,
+                            color="black" if bright else "white")
+            ax.set_xticks(range(len(grid.columns)), [str(n) for n in grid.columns])
+            ax.set_yticks(range(len(grid.index)), [f"{phi:g}x" for phi in grid.index])
+            ax.set_xlabel("mobile chargers n_m (0: fixed chargers)")
+            ax.set_ylabel("charger capacity phi (x c_w)")
+            ax.set_title(f"{label}, mean of {trials} trials", fontsize=10)
+            fig.colorbar(image, ax=ax, fraction=0.05, pad=0.02)
+    return Path(path)
+
+
+def _spread(x, k, n, log_x, span):
+    """x of the k-th of n trials of a configuration at ``x``: spread over a narrow column."""
+    offset = (k / max(n - 1, 1) - 0.5) * _SPREAD * span
+    return x * 10.0 ** offset if log_x else x + offset
+
+
+def work_and_efficiency(runs, bounds, path, title, x, xlabel, efficiency="efficiency", log_x=False,
+                        fixed_line=False):
+    """Figs 10-12: work and efficiency against the varied parameter ``x``, both strategies.
+
+    Per-trial values as small dots (each configuration's trials spread over a narrow
+    column, the strategies side by side), means as diamonds joined by a line, the
+    analytic bound of each strategy (section 9) as a dashed line through its configurations.
+    With ``fixed_line`` the fixed strategy, which does not vary with ``x``, is drawn as
+    horizontal lines: its mean (solid) and its bound (dashed) across the axis.
+
+    Parameters
+    ----------
+    runs : pandas.DataFrame
+        Per-trial rows: ``strategy``, ``x``, ``work`` and ``efficiency``.
+    bounds : pandas.DataFrame
+        One row per configuration: ``strategy``, ``x``, ``bound_work``, ``bound_efficiency``.
+    path : str or Path
+    title : str
+    x : str
+        The varied parameter's column.
+    xlabel : str
+    efficiency : str
+        The efficiency column (Fig 12: ``efficiency_with_loss``).
+    log_x : bool
+    fixed_line : bool
+
+    Returns
+    -------
+    Path
+    """
+    panels = (("work", "bound_work", "work W (points)"),
+              (efficiency, "bound_efficiency", "efficiency" if efficiency == "efficiency"
+               else "efficiency: work energy / (total + lost)"))
+    values = np.sort(runs.loc[runs["strategy"] != "fixed" if fixed_line else slice(None), x].unique())
+    span = np.log10(values[-1] / values[0]) if log_x else values[-1] - values[0]
+    strategies = sorted(runs["strategy"].unique())
+    trials = int(runs.groupby(["strategy", x]).size().max())
+    with _figure(path, title, (11.0, 4.6), ncols=2) as (mpl, fig, axes):
+        for ax, (column, bound, label) in zip(axes, panels):
+            for s, strategy in enumerate(strategies):
+                colour = COLOURS.get(strategy, f"C{s + 2}")
+                mine = runs[runs["strategy"] == strategy]
+                limit = bounds[bounds["strategy"] == strategy].sort_values(x)
+                if fixed_line and strategy == "fixed":
+                    ax.axhline(mine[column].mean(), color=colour, lw=1.5,
+                               label=f"{LABELS.get(strategy, strategy)}: mean")
+                    ax.axhline(limit[bound].iloc[0], color=colour, lw=1.2, ls="--",
+                               label=f"{LABELS.get(strategy, strategy)}: bound")
+                    continue
+                dodge = _dodge(s, len(strategies), 1.5 * _SPREAD)
+                shift = (lambda v: v * 10.0 ** (dodge * span)) if log_x else (lambda v: v + dodge * span)
+                for value, group in mine.groupby(x):
+                    n = len(group)
+                    xs = [_spread(shift(value), k, n, log_x, span) for k in range(n)]
+                    ax.plot(xs, group[column], ".", color=colour, ms=2.5, alpha=0.35)
+                means = mine.groupby(x)[column].mean()
+                ax.plot([shift(v) for v in means.index], means.to_numpy(), "-D", color=colour, ms=5, lw=1,
+                        label=f"{LABELS.get(strategy, strategy)}: trials and mean")
+                ax.plot(limit[x], limit[bound], "--", color=colour, lw=1.2,
+                        label=f"{LABELS.get(strategy, strategy)}: bound")
+            if log_x:
+                ax.set_xscale("log")
+                ax.set_xticks(values, [f"{v:g}" for v in values])
+                ax.minorticks_off()
+            else:
+                ax.set_xticks(values, [f"{v:g}" for v in values])
+            if column == efficiency:  # a ratio: the whole of [0, 1] (Fig 12's loss bound leaves it below)
+                ax.set_ylim(0.0, 1.02)
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(label)
+            ax.grid(alpha=0.3)
+        axes[0].legend(fontsize=8, title=f"{trials} trials per point", title_fontsize=8)
+    return Path(path)

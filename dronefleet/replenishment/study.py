@@ -1,0 +1,126 @@
+"""``dronefleet reproduce fig09..fig12``: the replenishment figures' tables, PNGs and check.
+
+Called by :mod:`dronefleet.reproduce` for the figures of :data:`experiments.FIGURES`. Each
+figure runs its whole grid (:func:`experiments.load_grid`; seconds, so nothing is reused)
+and writes under ``<results>/<figure>/``: ``runs.parquet`` (one row per trial: configuration,
+trial, seed, metrics) and ``bounds.parquet`` (one row per configuration), then draws its
+PNG from those two files alone. ``--quick``: :data:`QUICK_TRIALS` trials of
+:data:`QUICK_TICKS` ticks.
+"""
+
+import time
+
+import numpy as np
+import pandas as pd
+
+from ..sweep import SweepError
+from . import experiments
+from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
+from .params import Params
+
+QUICK_TRIALS = 4
+QUICK_TICKS = 1500
+#: The two configurations `--check` re-runs per figure (every trial of each), as column values.
+CHECK_CONFIGS = {
+    "fig09": ({"strategy": "fixed"},
+              {"strategy": "mobile", "n_chargers": 4, "charger_capacity_factor": 2.0}),
+    "fig10": ({"strategy": "fixed", "work_ratio": 0.25},
+              {"strategy": "mobile", "work_ratio": 4.0}),
+    "fig11": ({"strategy": "fixed", "charge_rate": 0.5},
+              {"strategy": "mobile", "charge_rate": 0.1}),
+    "fig12": ({"strategy": "fixed"},
+              {"strategy": "mobile", "transfer_loss": 0.7}),
+}
+#: Figs 10-12: the varied parameter and how each figure draws it.
+CURVES = {
+    "fig10": dict(x="work_ratio", xlabel="work ratio r (v_work = 0.1 r per tick; log scale)", log_x=True),
+    "fig11": dict(x="charge_rate", xlabel="charge rate k (v_charge = k per tick)"),
+    "fig12": dict(x="transfer_loss", xlabel="transfer loss lambda (fraction of what the charger gives)",
+                  efficiency="efficiency_with_loss", fixed_line=True),
+}
+TITLES = {
+    "fig09": "Figure 9: mobile chargers n_m x capacity phi (fixed chargers in the 0 / 0x cell)",
+    "fig10": "Figure 10: work and efficiency vs work ratio r, fixed vs MC(6, 2)",
+    "fig11": "Figure 11: work and efficiency vs charge rate k, fixed vs MC(6, 2)",
+    "fig12": "Figure 12: work and efficiency vs transfer loss, MC(6, 2); fixed chargers as lines",
+}
+
+
+def grid(figure, quick=False):
+    """The figure's grid (:func:`experiments.load_grid`), shortened with ``quick``."""
+    path = experiments.grid_path(figure)
+    if quick:
+        return experiments.load_grid(path, changes={"ticks": QUICK_TICKS}, trials=QUICK_TRIALS)
+    return experiments.load_grid(path)
+
+
+def tidy(study, figure):
+    """Run the figure's grid; write ``runs.parquet`` and ``bounds.parquet``."""
+    from ..reproduce import _write_parquet
+
+    g = grid(figure, study.quick)
+    start = time.perf_counter()
+    runs = experiments.run_configs(g.configs, g.trials, study.jobs)
+    study.log(f"  {g.name}: {len(g.configs)} configurations x {g.trials} trials of {g.configs[0].ticks} ticks "
+              f"in {time.perf_counter() - start:.1f} s", flush=True)
+    d = study.figure_dir(figure)
+    _write_parquet(runs, d / "runs.parquet")
+    _write_parquet(experiments.bounds_table(g.configs), d / "bounds.parquet")
+
+
+def draw(study, figure):
+    """The figure's PNG from its tables alone."""
+    from ..reproduce import _draw, _read
+    from . import figures
+
+    runs = _read(study, figure, "runs")
+    ticks = int(runs["ticks"].max())
+    title = f"{TITLES[figure]}, {ticks} ticks"
+    path = study.root / figure / f"{figure}.png"
+    if figure == "fig09":
+        return [_draw(figures.heatmaps, runs, path, title)]
+    bounds = _read(study, figure, "bounds")
+    curve = CURVES[figure]
+    return [_draw(lambda table, tmp, t: figures.work_and_efficiency(table, bounds, tmp, t, **curve),
+                  runs, path, title)]
+
+
+def _same(a, b):
+    return a == b or (a != a and b != b)  # NaN equals NaN
+
+
+def check(study, figure):
+    """Re-run :data:`CHECK_CONFIGS` of ``figure`` (every trial) and compare with its ``runs.parquet``.
+
+    Returns the differences, one line each; logs one line per configuration ending in
+    ``identical`` when all its values agree.
+    """
+    from ..reproduce import _read
+    from .simulate import simulate
+
+    path = study.root / figure / "runs.parquet"
+    if not path.exists():
+        raise SweepError(f"{path} is missing: run dronefleet reproduce {figure}{' --quick' if study.quick else ''} "
+                         "first (it writes the table that --check compares with)")
+    committed = _read(study, figure, "runs")
+    study.log(f"{figure}: re-running {len(CHECK_CONFIGS[figure])} configurations of the "
+              f"{len(committed.groupby(list(CONFIG_COLUMNS)))} in {path}")
+    differences = []
+    for where in CHECK_CONFIGS[figure]:
+        mine = committed[np.logical_and.reduce([committed[k] == v for k, v in where.items()])]
+        configs = mine[list(CONFIG_COLUMNS)].drop_duplicates()
+        label = ",".join(f"{k}={v}" for k, v in where.items())
+        if len(configs) != 1:
+            raise SweepError(f"{path} holds {len(configs)} configurations with {label}; --check needs exactly one")
+        values = {k: v.item() if hasattr(v, "item") else v for k, v in configs.iloc[0].items()}
+        mine = mine.sort_values("trial")
+        result = simulate(Params(**values), len(mine), first_trial=int(mine["trial"].iloc[0]))
+        fresh = pd.DataFrame({c: result[c] for c in ("trial", "seed", *METRIC_COLUMNS)})
+        found = [f"{figure} {label} trial {trial}: {column} committed {old!r}, re-run {new!r}"
+                 for column in fresh.columns
+                 for trial, old, new in zip(fresh["trial"], mine[column].tolist(), fresh[column].tolist())
+                 if not _same(old, new)]
+        study.log(f"  {label}: {fresh.size} values, {'identical' if not found else f'{len(found)} differ'}",
+                  flush=True)
+        differences += found
+    return differences

@@ -177,8 +177,8 @@ def write_table(table, path, config):
     return write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
-def run_dir_state(out_dir, names=TABLES):
-    """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table ``names`` of a run),
+def run_dir_state(out_dir, table_names=TABLES):
+    """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table ``table_names`` of a run),
     ``"partial"`` (some tables and nothing else: left by a dronefleet before complete-or-absent
     run folders), ``"file"`` (not a folder) or ``"other"`` (files that are not a run's tables).
     Hidden entries (``.DS_Store``, ...) go with the run, but a folder holding only those is not empty."""
@@ -189,7 +189,7 @@ def run_dir_state(out_dir, names=TABLES):
         return "file"
     entries = [p.name for p in out_dir.iterdir()]
     names = {name for name in entries if not name.startswith(".")}
-    tables = {f"{name}.parquet" for name in names}
+    tables = {f"{name}.parquet" for name in table_names}
     if not entries:
         return "empty"
     if not names or not names <= tables:

@@ -37,7 +37,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..config import SCENARIO_KEY, ConfigError, _parse_override, _read_toml, _show, _suggest
+from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _read_toml, _show, _suggest
 from ..scenarios import Field
 from .bounds import COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds
 from .params import BASE_CAPACITY, Params
@@ -76,9 +76,9 @@ SCHEMA: dict[str, Field] = {
                            "lambda: a worker receives (1 - lambda) of what a mobile charger gives"),
 }
 SECTIONS: dict[str, tuple[str, ...]] = {}
-for _name, _field in SCHEMA.items():
-    SECTIONS[_field.section] = SECTIONS.get(_field.section, ()) + (_name,)
-del _name, _field
+for _key, _field in SCHEMA.items():
+    SECTIONS[_field.section] = SECTIONS.get(_field.section, ()) + (_key,)
+del _key, _field
 
 DEFAULTS: dict = {**{f.name: f.default for f in fields(Params)},
                   "strategy": "mobile", "n_chargers": 6, "first_trial": 1}
@@ -183,7 +183,7 @@ def _flatten(document, where=None, origin=None):
             raise ConfigError(f"{pre}key {section!r} is at the top level; put it in section "
                               f"[{SCHEMA[section].section}]", [section])
         if section not in SECTIONS:
-            raise ConfigError(f"{pre}unknown section [{_show(section)}]{_suggest(str(section), SECTIONS)}. "
+            raise ConfigError(f"{pre}unknown section [{_name(section)}]{_suggest(section, SECTIONS)}. "
                               f"Allowed sections: {', '.join(SECTIONS)}")
         if not isinstance(table, dict):
             raise ConfigError(f"{pre}[{section}] must be a table of key = value, got {_show(table)}")

@@ -49,7 +49,6 @@ import pyarrow.parquet as pq
 
 from .config import SECONDS_PER_WEEK, config_from_dict
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
-from .metrics import accuracy_points, decision_accuracy, run_metrics
 from .provenance import stamp
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
@@ -106,6 +105,8 @@ def attempts_table(result):
 
 
 def fleet_table(result):
+    from .metrics import accuracy_points, decision_accuracy  # pandas: only for delivery's tables
+
     columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
                                      "intercept", "steps", "soc", "lost", "decision_accuracy")}
     points = accuracy_points(result.config)
@@ -136,6 +137,8 @@ def timeseries_table(result):
 
 
 def summary_table(result):
+    from .metrics import run_metrics
+
     c = result.config
     row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,
                horizon_weeks=c.horizon_weeks, period=result.period, **run_metrics(result))

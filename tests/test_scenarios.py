@@ -263,3 +263,10 @@ def test_hostile_input_is_refused_in_one_line_before_any_work(tmp_path, capsys, 
     assert message in captured.err, captured.err
     assert captured.err.count("\n") == 1 and captured.out == ""
     assert not out.exists()
+
+
+def test_a_run_without_a_bound_still_runs_and_says_why(tmp_path, capsys):
+    out = _run(tmp_path, "transfer_loss=0.999")
+    printed = capsys.readouterr().out
+    assert "no bound: no constant-supply bound" in printed and "(W_cs)" not in printed
+    assert pq.read_table(out / "summary.parquet").num_rows == 2

@@ -1,6 +1,7 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
-[--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet sweep plan|run|status|collect SWEEP``;
-``dronefleet reproduce fig16..fig20|all [--quick]``."""
+[--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
+``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig16..fig20|all [--quick]``.
+A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery."""
 
 import argparse
 import errno
@@ -12,7 +13,7 @@ import time
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from . import provenance, sweep
+from . import provenance, scenarios, sweep
 from .config import SECONDS_PER_WEEK, ConfigError, load_config
 
 
@@ -45,8 +46,9 @@ def _duration(seconds):
     return f"{int(hours)} h {rest / 60.0:04.1f} min"
 
 
-def format_summary(m, wall_s):
-    """The run's summary as printed by ``dronefleet run`` (``m`` from ``metrics.run_metrics``)."""
+def format_summary(m, wall_s=None):
+    """The run's summary as printed by ``dronefleet run`` (``m`` from ``metrics.run_metrics``;
+    the wall time line only if ``wall_s`` is given)."""
     delivered_pct = 100.0 * m["delivered"] / m["orders_arrived"] if m["orders_arrived"] else float("nan")
     lines = [
         ("orders arrived", f"{m['orders_arrived']}"),
@@ -60,15 +62,17 @@ def format_summary(m, wall_s):
     if m["reservations_won"]:
         lines.append(("reservations won", f"{m['reservations_won']}, median wait "
                       f"{_duration(m['median_reservation_wait_s'])}, forecast met {m['forecast_met_pct']:.1f} %"))
-    lines.append(("wall time", f"{wall_s:.2f} s"))
+    if wall_s is not None:
+        lines.append(("wall time", f"{wall_s:.2f} s"))
     return "\n".join(f"  {label:<22}{value}" for label, value in lines)
 
 
-def default_out(name, config):
-    """``results/runs/<name>-seed<N>-<8 hex>``: the hex digits start the SHA-256 of the resolved
-    config's JSON, so runs of different configs (``--set``, ``--fleet``) never share a folder."""
+def default_out(name, config, tag=None):
+    """``results/runs/<name>-<tag>-<8 hex>`` (``tag`` by default ``seed<N>``): the hex digits start
+    the SHA-256 of the resolved config's JSON, so runs of different configs (``--set``, ``--fleet``)
+    never share a folder."""
     digest = hashlib.sha256(config.to_json().encode()).hexdigest()[:8]
-    return Path("results") / "runs" / f"{name}-seed{config.seed}-{digest}"
+    return Path("results") / "runs" / f"{name}-{tag or f'seed{config.seed}'}-{digest}"
 
 
 @contextmanager
@@ -99,19 +103,20 @@ def _probe_folders(folders):
         raise
 
 
-def check_outputs(out, save_fleet, overwrite):
+def check_outputs(out, save_fleet, overwrite, tables=None):
     """Refuse, before any work, outputs that the run could not write or would silently replace.
 
-    ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder; its parent
-    and ``save_fleet``'s folder must be writable; ``save_fleet`` must not exist unless ``overwrite``.
+    ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder (of the table
+    names ``tables``, by default delivery's); its parent and ``save_fleet``'s folder must be
+    writable; ``save_fleet`` must not exist unless ``overwrite``.
     """
-    from .records import clean_leftovers, run_dir_state
+    from .records import TABLES, clean_leftovers, run_dir_state
 
     if out.name in ("", ".."):  # "." and "/" normalised have no name: no sibling to write first
         raise OutputError(f"--out {str(out)!r} must name a folder of its own, e.g. results/runs/mine")
     with _writing(out):
         clean_leftovers(out)  # first: it may put back a run that a killed --overwrite had set aside
-        state = run_dir_state(out)
+        state = run_dir_state(out, tables or TABLES)
     if state == "file":
         raise OutputError(f"--out {str(out)!r} is a file; it must be a folder (absent, empty or a run)")
     if state == "other":
@@ -129,6 +134,9 @@ def check_outputs(out, save_fleet, overwrite):
 
 
 def run(args):
+    scenario = scenarios.scenario_of(args.config)
+    if scenario.name != "delivery":
+        return run_scenario(scenario, args)
     overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
     config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
     name = Path(args.config).stem if args.config else "paper"
@@ -163,6 +171,45 @@ def run(args):
     return 0
 
 
+def run_scenario(scenario, args):
+    """``dronefleet run`` through the scenario contract: load (refusing bad input), check the
+    output folder, simulate, write the tables (complete or absent), print the summary."""
+    for flag, value in (("--fleet", args.fleet), ("--save-fleet", args.save_fleet)):
+        if value:
+            raise ConfigError(f"{flag} applies to delivery runs only, not to scenario {scenario.name!r}")
+    config = scenario.load(args.config, args.set, args.seed)
+    name = Path(args.config).stem
+    out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config, scenario.label(config))
+    check_outputs(out, None, args.overwrite, scenario.tables)
+
+    from .records import write_tables
+
+    print(f"dronefleet run: {name}, {scenario.describe(config)} "
+          "(the first run on a machine compiles the kernel, ~30 s)", flush=True)
+    start = time.perf_counter()
+    tables = scenario.simulate(config)
+    wall = time.perf_counter() - start
+    with _writing(out):
+        write_tables(tables, out, config, overwrite=args.overwrite)
+    print(scenario.format_summary(tables))
+    print(f"  {'wall time':<22}{wall:.2f} s")
+    print(f"  {'tables':<22}{out}/{{{','.join(tables)}}}.parquet")
+    return 0
+
+
+def bounds(args):
+    """``dronefleet bounds CONFIG``: the scenario's analytic bounds (replenishment, spec section 9)."""
+    scenario, config = scenarios.load(args.config, args.set)
+    if scenario.format_bounds is None:
+        having = [s.name for s in scenarios.SCENARIOS.values() if s.format_bounds is not None]
+        raise ConfigError(f"{args.config!r} is a {scenario.name} config: analytic bounds exist only for "
+                          f"{', '.join(having)}")
+    text = scenario.format_bounds(config)  # refuses parameters where a bound does not exist
+    print(f"dronefleet bounds: {Path(args.config).stem}, {scenario.describe(config)}")
+    print(text)
+    return 0
+
+
 class _Version(argparse.Action):
     """``--version``: ``dronefleet <version> (commit <sha>)``; the commit is looked up only when asked."""
 
@@ -181,7 +228,8 @@ def build_parser(reproduce_arguments=True):
     parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
     p = commands.add_parser("run", help="simulate one run and write its tables as parquet")
-    p.add_argument("config", nargs="?", help="TOML config file (default: the paper's scenario)")
+    p.add_argument("config", nargs="?", help="TOML config file, any scenario (default: the paper's delivery "
+                                             "scenario), e.g. configs/replenishment.toml")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set tau_minutes=20 or --set auction.rule=random")
     p.add_argument("--seed", type=int, help="seed of the run (overrides run.seed)")
@@ -198,6 +246,13 @@ def build_parser(reproduce_arguments=True):
     p.add_argument("--save-fleet", metavar="FILE",
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.set_defaults(func=run)
+    p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
+                            description="Work and efficiency bounds of REPLENISHMENT.md section 9, both "
+                                        "strategies; refused (exit 2) where a bound does not exist.")
+    p.add_argument("config", help="TOML config file with scenario = \"replenishment\"")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a config key, e.g. --set transfer_loss=0.2 or --set energy.work_ratio=2")
+    p.set_defaults(func=bounds)
     _add_sweep_commands(commands)
     _add_reproduce_command(commands, reproduce_arguments)
     return parser

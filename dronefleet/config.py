@@ -68,6 +68,8 @@ SECONDS_PER_WEEK = 604_800.0
 SECONDS_PER_MINUTE = 60.0
 #: Largest config file read [bytes]; real ones are a few KB.
 MAX_CONFIG_BYTES = 1_000_000
+#: Top-level key naming a config file's scenario (:mod:`dronefleet.scenarios`); absent = delivery.
+SCENARIO_KEY = "scenario"
 
 
 class ConfigError(ValueError):
@@ -546,15 +548,15 @@ def resolve_key(key: str) -> str:
     return key
 
 
-def _parse_override(text: Any) -> tuple[str, Any]:
-    """'key=value' -> (parameter name, value); value read as TOML, else a bare string."""
+def _parse_override(text: Any, resolve: Any = resolve_key) -> tuple[str, Any]:
+    """'key=value' -> (parameter name by ``resolve``, value); value read as TOML, else a bare string."""
     if not isinstance(text, str) or "=" not in text:
         raise ConfigError(f"--set needs key=value, got {_show(text)}")
     key, _, raw = text.partition("=")
     key, raw = key.strip(), raw.strip()
     if not key:
         raise ConfigError(f"--set needs key=value, got {_show(text)}")
-    name = resolve_key(key)
+    name = resolve(key)
     try:
         doc = tomllib.loads(f"v = {raw}")
         value = doc["v"] if list(doc) == ["v"] else raw
@@ -623,7 +625,9 @@ def load_config(path: str | PathLike | None = None,
     Parameters
     ----------
     path : TOML file, keys in their sections (any subset; missing keys keep
-        their defaults), or None for the defaults.
+        their defaults), or None for the defaults. A top-level
+        ``scenario = "delivery"`` is allowed; another scenario is refused
+        (:func:`dronefleet.scenarios.load` dispatches on it).
     overrides : ``"key=value"`` strings (the CLI's ``--set``), applied in
         order after the file. ``key`` is ``section.key`` or the bare key name
         (all key names are unique); ``value`` is read as a TOML value
@@ -645,7 +649,13 @@ def load_config(path: str | PathLike | None = None,
     parsed = [(_parse_override(o), o) for o in overrides]
     flat: dict[str, Any] = {}
     if path is not None:
-        flat.update(_flatten(_read_toml(path), str(path), origin))
+        document = _read_toml(path)
+        # the other scenarios' configs name theirs (dronefleet.scenarios); delivery's may
+        scenario = document.pop(SCENARIO_KEY, "delivery")
+        if scenario != "delivery":
+            raise ConfigError(f"config file {str(path)!r} is for scenario {_show(scenario)}; "
+                              "only a delivery config is allowed here")
+        flat.update(_flatten(document, str(path), origin))
     for (name, value), text in parsed:
         flat[name] = value
         origin[name] = f"--set {text}"

@@ -49,7 +49,6 @@ import pyarrow.parquet as pq
 
 from .config import SECONDS_PER_WEEK, config_from_dict
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
-from .metrics import accuracy_points, decision_accuracy, run_metrics
 from .provenance import stamp
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
@@ -106,6 +105,8 @@ def attempts_table(result):
 
 
 def fleet_table(result):
+    from .metrics import accuracy_points, decision_accuracy  # pandas: only for delivery's tables
+
     columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
                                      "intercept", "steps", "soc", "lost", "decision_accuracy")}
     points = accuracy_points(result.config)
@@ -136,6 +137,8 @@ def timeseries_table(result):
 
 
 def summary_table(result):
+    from .metrics import run_metrics
+
     c = result.config
     row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,
                horizon_weeks=c.horizon_weeks, period=result.period, **run_metrics(result))
@@ -177,8 +180,8 @@ def write_table(table, path, config):
     return write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
-def run_dir_state(out_dir):
-    """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table of a run),
+def run_dir_state(out_dir, table_names=TABLES):
+    """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table ``table_names`` of a run),
     ``"partial"`` (some tables and nothing else: left by a dronefleet before complete-or-absent
     run folders), ``"file"`` (not a folder) or ``"other"`` (files that are not a run's tables).
     Hidden entries (``.DS_Store``, ...) go with the run, but a folder holding only those is not empty."""
@@ -189,7 +192,7 @@ def run_dir_state(out_dir):
         return "file"
     entries = [p.name for p in out_dir.iterdir()]
     names = {name for name in entries if not name.startswith(".")}
-    tables = {f"{name}.parquet" for name in TABLES}
+    tables = {f"{name}.parquet" for name in table_names}
     if not entries:
         return "empty"
     if not names or not names <= tables:
@@ -229,7 +232,14 @@ def _alive(pid):
 
 
 def write_run(result, out_dir, overwrite=False):
-    """Write every table of ``result`` as ``out_dir/<table>.parquet``; return the paths.
+    """Write every table of the delivery run ``result``: :func:`write_tables` of :func:`tables`."""
+    return write_tables(tables(result), out_dir, result.config, overwrite)
+
+
+def write_tables(named_tables, out_dir, config, overwrite=False):
+    """Write ``named_tables`` (name -> pyarrow Table) as ``out_dir/<name>.parquet`` with
+    ``config`` (anything with ``to_json()``) and the provenance in each file's metadata
+    (:func:`write_table`); return the paths. Any scenario's run folder is written here.
 
     The folder is complete or absent: the tables go into the hidden sibling
     ``.<name>.<host>-<pid>.tmp``, which is then renamed to ``out_dir`` (atomic on POSIX). An
@@ -252,9 +262,9 @@ def write_run(result, out_dir, overwrite=False):
     tmp, aside = _temporary_name(out_dir, "tmp"), _temporary_name(out_dir, "old")
     try:
         tmp.mkdir()
-        paths = {name: out_dir / write_table(table, tmp / f"{name}.parquet", result.config).name
-                 for name, table in tables(result).items()}
-        state = run_dir_state(out_dir)
+        paths = {name: out_dir / write_table(table, tmp / f"{name}.parquet", config).name
+                 for name, table in named_tables.items()}
+        state = run_dir_state(out_dir, named_tables)
         if state in ("complete", "partial") and overwrite:
             os.replace(out_dir, aside)
         elif state not in ("absent", "empty"):
@@ -270,6 +280,11 @@ def write_run(result, out_dir, overwrite=False):
     return paths
 
 
+def read_config_dict(path):
+    """The resolved config embedded in a dronefleet parquet file, as the dict of its JSON."""
+    return json.loads(pq.read_schema(path).metadata[CONFIG_KEY])
+
+
 def read_config(path):
-    """The resolved config embedded in a dronefleet parquet file."""
-    return config_from_dict(json.loads(pq.read_schema(path).metadata[CONFIG_KEY]))
+    """The resolved delivery config embedded in a dronefleet parquet file."""
+    return config_from_dict(read_config_dict(path))

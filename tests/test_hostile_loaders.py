@@ -22,7 +22,7 @@ import pyarrow.parquet as pq
 import pytest
 
 import dronefleet
-from dronefleet import cli, simulation
+from dronefleet import cli, scenarios, simulation
 from dronefleet.config import RUN_LIMITS, default_config, load_config, replace, run_size
 from dronefleet.fleet import COLUMNS, load_fleet
 from dronefleet.records import write_table
@@ -292,7 +292,7 @@ def test_hostile_input_in_a_process_exits_2_with_one_line(name, tmp_path):
 
 def test_the_refusals_leave_the_paper_and_a_10000_uav_fleet_allowed():
     for path in sorted((REPO / "configs").glob("*.toml")):
-        load_config(path)
+        scenarios.load(path)  # each through its scenario's loader
     big = load_config(overrides=["n_uavs=10000", f"tau_minutes={15 * 25 / 10000}"])
     assert all(size <= RUN_LIMITS[name] for name, size in run_size(big).items())
     load_config(seed=2**63 - 1)

@@ -30,12 +30,17 @@ class BoundUndefinedError(ConfigError):
 class Bounds:
     """Upper bounds for one configuration (work in points, efficiency a ratio).
 
-    ``duty`` is D_work / D_cycle (fixed) or D_work,cs / (D_work,cs + D_charge,cs).
+    ``duty`` is D_work / D_cycle (fixed) or D_work,cs / (D_work,cs + D_charge,cs);
+    ``d_charge``, ``d_work`` and ``d_cycle`` are those durations [ticks] (for the
+    constant supply, d_cycle = D_work,cs + D_charge,cs: no commute).
     """
 
     work: float
     efficiency: float
     duty: float
+    d_charge: float
+    d_work: float
+    d_cycle: float
 
 
 def fixed_bounds(params: Params) -> Bounds:
@@ -63,7 +68,8 @@ def fixed_bounds(params: Params) -> Bounds:
     duty = d_work / d_cycle
     work = params.n_workers * duty * params.ticks
     efficiency = 1.0 - d_cycle * V_MIN / c_w - 2.0 * COMMUTE_TICKS * V_MOVE / c_w
-    return Bounds(work=work, efficiency=efficiency, duty=duty)
+    return Bounds(work=work, efficiency=efficiency, duty=duty, d_charge=d_charge, d_work=d_work,
+                  d_cycle=d_cycle)
 
 
 def constant_supply_bounds(params: Params) -> Bounds:
@@ -88,7 +94,8 @@ def constant_supply_bounds(params: Params) -> Bounds:
     duty = d_work / (d_work + d_charge)
     work = params.n_workers * params.ticks * duty
     efficiency = 1.0 - (V_MIN * (d_work + d_charge) + lam * params.v_charge * d_charge) / c_w
-    return Bounds(work=work, efficiency=efficiency, duty=duty)
+    return Bounds(work=work, efficiency=efficiency, duty=duty, d_charge=d_charge, d_work=d_work,
+                  d_cycle=d_work + d_charge)
 
 
 def bounds(params: Params) -> Bounds:

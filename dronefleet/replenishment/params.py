@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from ..config import ConfigError
 
-__all__ = ["Params", "ParamsError", "STRATEGIES", "BASE_CAPACITY", "MAX_SAMPLES"]
+__all__ = ["Params", "ParamsError", "STRATEGIES", "BASE_CAPACITY", "MAX_SAMPLES", "MAX_ROBOT_TICKS"]
 
 STRATEGIES = ("fixed", "mobile")
 
@@ -26,6 +26,11 @@ BASE_CAPACITY = 4 * 22
 # Cap on trials x samples of the time series (8 bytes x ~10 columns each):
 # 1e7 rows stay below 1 GB.
 MAX_SAMPLES = 10_000_000
+
+# Cap on trials x ticks x robots, the kernel's work (~1 us per robot-tick for a plain
+# implementation, far less vectorised): the paper's largest grid point (50 x 6000 x 18)
+# is 5.4e6; 1e9 keeps one configuration to minutes, never hours.
+MAX_ROBOT_TICKS = 1_000_000_000
 
 # Fixed physical constants of the model (section 2), not parameters.
 V_MIN = 0.005           # idle cost, every robot, every tick
@@ -162,4 +167,9 @@ class Params:
                 f"trials x (ticks // sample_every + 1) = {samples} time-series rows exceed "
                 f"{MAX_SAMPLES}: raise sample_every or lower trials/ticks",
                 ("trials", "ticks", "sample_every"))
+        robot_ticks = self.trials * self.ticks * (self.n_workers + self.n_chargers)
+        if robot_ticks > MAX_ROBOT_TICKS:
+            raise ParamsError(
+                f"trials x ticks x robots = {robot_ticks:.3g} robot-ticks exceed "
+                f"{MAX_ROBOT_TICKS:.0e}: lower trials or ticks", ("trials", "ticks"))
         return self

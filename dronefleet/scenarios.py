@@ -1,0 +1,156 @@
+"""The scenarios dronefleet simulates, registered once by name, and the contract each implements.
+
+The CLI works on this contract, never on a concrete scenario (``dronefleet run`` keeps a
+delivery-only path for fleet files and the progress bar). A config file names its scenario
+with a top-level ``scenario = "<name>"``; a file without the key is a delivery config, so
+every existing config, sweep and result keeps working.
+
+The contract: a scenario is a module defining
+
+``NAME``
+    its name in :data:`SCENARIOS`.
+``SCHEMA``, ``DEFAULTS``
+    ``{key: Field(section, unit, allowed, doc)}`` and ``{key: default}``: every config key,
+    its TOML section, unit, allowed values and meaning.
+``load(path, overrides, seed) -> config``
+    the one validation entry point: the TOML file (or None for the defaults), ``--set``
+    strings ``"key=value"`` (``section.key`` or the bare key), a seed (None: the file's).
+    Any bad input raises :class:`dronefleet.config.ConfigError` (one line) before any work.
+    ``config.to_json()`` is its deterministic JSON (the default run folder hashes it);
+    ``read_config(path)`` reads it back from a table the scenario wrote.
+``simulate(config) -> dict[str, pyarrow.Table]``
+    the run's tables, named as in ``TABLES`` (which holds ``"summary"``); written by
+    :func:`dronefleet.records.write_tables`, atomically, a run folder complete or absent,
+    each file with the config and :func:`dronefleet.provenance.stamp` in its metadata.
+``format_summary(tables) -> str``
+    what ``dronefleet run`` prints, from the tables alone.
+``describe(config)``, ``label(config)``
+    a one-line description (the head of ``run``), a short tag for the default folder name.
+``FIGURES``
+    the names of its figures in ``dronefleet reproduce`` (possibly empty).
+``format_bounds(config) -> str`` (optional)
+    analytic bounds, for ``dronefleet bounds``; refusing parameters where none exists.
+
+Where each scenario's pieces are:
+
+* ``delivery``: :mod:`dronefleet.delivery_scenario`, an adaptor over the top-level modules
+  (config, simulation, engine, records, metrics, fleet, figures, reproduce), which stay where
+  they are until delivery gets its own subpackage.
+* ``replenishment``: :mod:`dronefleet.replenishment.scenario` over the subpackage
+  (params, simulate, kernel, bounds).
+
+Registering is one entry in :data:`SCENARIOS`: a plain dict, no import by string; each entry
+imports its module only when first used, so ``dronefleet --help`` stays cheap.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Callable
+
+from .config import SCENARIO_KEY, ConfigError, _read_toml, _show, _suggest
+
+__all__ = ["Field", "Scenario", "SCENARIOS", "get", "scenario_of", "load"]
+
+
+@dataclass(frozen=True)
+class Field:
+    """Declaration of one config key: TOML section, unit, allowed values, meaning."""
+
+    section: str
+    unit: str
+    allowed: str
+    doc: str
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A registered scenario: its name and a function importing its contract module."""
+
+    name: str
+    entry: Callable[[], ModuleType]
+
+    @property
+    def module(self) -> ModuleType:
+        return self.entry()  # Python caches the import
+
+    @property
+    def tables(self) -> tuple[str, ...]:
+        return self.module.TABLES
+
+    @property
+    def figures(self) -> tuple[str, ...]:
+        return self.module.FIGURES
+
+    @property
+    def schema(self) -> dict[str, Field]:
+        return self.module.SCHEMA
+
+    @property
+    def defaults(self) -> dict:
+        return self.module.DEFAULTS
+
+    def load(self, path=None, overrides=(), seed=None):
+        return self.module.load(path, overrides, seed)
+
+    def read_config(self, path):
+        return self.module.read_config(path)
+
+    def simulate(self, config) -> dict:
+        return self.module.simulate(config)
+
+    def format_summary(self, tables) -> str:
+        return self.module.format_summary(tables)
+
+    def describe(self, config) -> str:
+        return self.module.describe(config)
+
+    def label(self, config) -> str:
+        return self.module.label(config)
+
+    @property
+    def format_bounds(self) -> Callable | None:
+        return getattr(self.module, "format_bounds", None)
+
+
+def _delivery() -> ModuleType:
+    from . import delivery_scenario
+
+    return delivery_scenario
+
+
+def _replenishment() -> ModuleType:
+    from .replenishment import scenario
+
+    return scenario
+
+
+SCENARIOS: dict[str, Scenario] = {
+    "delivery": Scenario("delivery", _delivery),
+    "replenishment": Scenario("replenishment", _replenishment),
+}
+
+
+def get(name, where: str = "") -> Scenario:
+    """The scenario registered as ``name``; ConfigError listing the registered ones if none."""
+    if isinstance(name, str) and name in SCENARIOS:
+        return SCENARIOS[name]
+    suggestion = _suggest(name, SCENARIOS) if isinstance(name, str) else ""
+    raise ConfigError(f"{where}unknown scenario {_show(name)}{suggestion}; "
+                      f"registered scenarios: {', '.join(SCENARIOS)}", [SCENARIO_KEY])
+
+
+def scenario_of(path) -> Scenario:
+    """The scenario a config file names (``scenario = "..."`` at its top level; absent or no
+    file: delivery)."""
+    if path is None:
+        return SCENARIOS["delivery"]
+    document = _read_toml(path)
+    return get(document.get(SCENARIO_KEY, "delivery"), f"config file {str(path)!r}: ")
+
+
+def load(path=None, overrides=(), seed=None):
+    """``(scenario, config)`` of a config file: dispatch on its scenario, then its ``load``."""
+    scenario = scenario_of(path)
+    return scenario, scenario.load(path, overrides, seed)

@@ -1,6 +1,6 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
 [--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
-``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig16..fig20|all [--quick]``.
+``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig09..fig12|fig16..fig20|all [--quick]``.
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery."""
 
 import argparse
@@ -312,8 +312,10 @@ def _add_reproduce_command(commands, arguments):
 
     p.add_argument("figure", choices=(*reproduce.FIGURES, "all"))
     p.add_argument("--quick", action="store_true",
-                   help=f"seeds {reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]}, "
-                        f"{reproduce.QUICK_CHANGES['horizon_weeks']:g} weeks, under <results>/quick/ (seconds)")
+                   help=f"a check in seconds, under <results>/quick/: delivery figures with seeds "
+                        f"{reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]} and "
+                        f"{reproduce.QUICK_CHANGES['horizon_weeks']:g} weeks, replenishment figures with "
+                        f"{reproduce.replenishment.QUICK_TRIALS} trials of {reproduce.replenishment.QUICK_TICKS} ticks")
     p.add_argument("--jobs", type=_at_least(1), metavar="J", help="local processes for the sweeps (default: all CPUs)")
     p.add_argument("--results", default="results", metavar="DIR", help="results root (default: results)")
     p.add_argument("--redraw", action="store_true", help="only redraw the PNGs from the figure's parquet tables")

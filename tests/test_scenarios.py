@@ -270,3 +270,9 @@ def test_a_run_without_a_bound_still_runs_and_says_why(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "no bound: no constant-supply bound" in printed and "(W_cs)" not in printed
     assert pq.read_table(out / "summary.parquet").num_rows == 2
+
+
+def test_reproduce_draws_exactly_the_figures_the_scenarios_declare():
+    from dronefleet import reproduce
+    declared = [figure for s in scenarios.SCENARIOS.values() for figure in s.figures]
+    assert sorted(declared) == sorted(reproduce.FIGURES) and len(set(declared)) == len(declared)

@@ -50,7 +50,7 @@ NAME = "replenishment"
 TABLES = ("summary", "timeseries")
 #: Figures of ``dronefleet reproduce`` drawn from this scenario (fig09..fig12 come with
 #: dronefleet/replenishment/experiments.py).
-FIGURES: tuple[str, ...] = ()
+FIGURES: tuple[str, ...] = ("fig09", "fig10", "fig11", "fig12")
 
 #: Largest first trial index: seeds 876 k stay far inside int64.
 MAX_FIRST_TRIAL = 10**15

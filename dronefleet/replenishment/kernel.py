@@ -264,6 +264,33 @@ def wheels_from_force(fx, fy, mode):
     return s2, s1, mode
 
 
+@njit(cache=True, inline='always')
+def pair_geometry(tr, i, j, x, y, dist, inv_dist, ux_pair, uy_pair):
+    """Store the distance of robots i, j of trial tr in ``dist`` (n, n) [m], FAR beyond reach.
+
+    For pairs closer than R_RAB also ``inv_dist`` (1 / d) and the unit vectors
+    ``ux_pair, uy_pair`` (n, n) from i to j and back (world frame).
+    """
+    dx = x[tr, j] - x[tr, i]
+    dy = y[tr, j] - y[tr, i]
+    d2 = dx * dx + dy * dy
+    if d2 > RANGE2_FILTER:
+        dist[i, j] = FAR
+        dist[j, i] = FAR
+        return
+    d = np.sqrt(d2)
+    dist[i, j] = d
+    dist[j, i] = d
+    if d < R_RAB:
+        inv = 1.0 / d if d > 0.0 else 0.0
+        ux_pair[i, j] = dx * inv
+        uy_pair[i, j] = dy * inv
+        ux_pair[j, i] = -dx * inv
+        uy_pair[j, i] = -dy * inv
+        inv_dist[i, j] = inv
+        inv_dist[j, i] = inv
+
+
 # ------------------------------------------------------------------ supervisor VM
 
 
@@ -475,6 +502,10 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     near_idx = np.zeros((n, n), dtype=np.int64)
     range_n = np.zeros(n, dtype=np.int64)  # robots closer than R_RAB, ascending index
     range_idx = np.zeros((n, n), dtype=np.int64)
+    moved = np.zeros(n, dtype=np.bool_)   # pose changed this tick
+    obs_valid = np.zeros(n, dtype=np.bool_)   # obs_*_last is the current obstacle vector
+    obs_x_last = np.zeros(n)
+    obs_y_last = np.zeros(n)
     heard = np.zeros(n, dtype=np.bool_)
     rho = np.zeros(n)
     conditions = np.zeros(N_EVENTS, dtype=np.bool_)
@@ -507,6 +538,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             nxt = t % 2             # messages set now, read at t + 1
             # 1. act + physics: last tick's wheel command
             for i in range(n):
+                # at tick 1 nothing of this trial's geometry is computed yet
+                moved[i] = t == 1 or left[tr, i] != 0.0 or right[tr, i] != 0.0
                 if left[tr, i] != 0.0 or right[tr, i] != 0.0:
                     v = (left[tr, i] + right[tr, i]) * 0.5 / 100.0
                     omega = (right[tr, i] - left[tr, i]) / 100.0 / AXLE
@@ -515,40 +548,38 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     th[tr, i] = _wrap(th[tr, i] + omega * DT)
                     ct[tr, i] = cos(th[tr, i])
                     st[tr, i] = sin(th[tr, i])
-            # pair geometry, shared by neighbours, rays and transfers
+            # pair geometry, shared by neighbours, rays and transfers. Only pairs
+            # with a robot that moved change; the others keep last tick's values.
+            # A robot's obstacle vector depends on its own pose and the robots within
+            # RAY_REACH, so it is recomputed only after it or one of those (before
+            # or after the move) moved.
+            for i in range(n):
+                if moved[i]:
+                    obs_valid[i] = False
+                    for m in range(near_n[i]):
+                        obs_valid[near_idx[i, m]] = False
             for i in range(n):
                 near_n[i] = 0
                 range_n[i] = 0
             for i in range(n):
-                dist[i, i] = 0.0
                 for j in range(i + 1, n):
-                    dx = x[tr, j] - x[tr, i]
-                    dy = y[tr, j] - y[tr, i]
-                    d2 = dx * dx + dy * dy
-                    if d2 > RANGE2_FILTER:
-                        dist[i, j] = FAR
-                        dist[j, i] = FAR
-                        continue
-                    d = np.sqrt(d2)
-                    dist[i, j] = d
-                    dist[j, i] = d
+                    if moved[i] or moved[j]:
+                        pair_geometry(tr, i, j, x, y, dist, inv_dist, ux_pair, uy_pair)
+                    d = dist[i, j]
                     if d < R_RAB:
                         range_idx[i, range_n[i]] = j
                         range_n[i] += 1
                         range_idx[j, range_n[j]] = i
                         range_n[j] += 1
-                        inv = 1.0 / d if d > 0.0 else 0.0
-                        ux_pair[i, j] = dx * inv
-                        uy_pair[i, j] = dy * inv
-                        ux_pair[j, i] = -dx * inv
-                        uy_pair[j, i] = -dy * inv
-                        inv_dist[i, j] = inv
-                        inv_dist[j, i] = inv
                     if d < RAY_REACH:
                         near_idx[i, near_n[i]] = j
                         near_n[i] += 1
                         near_idx[j, near_n[j]] = i
                         near_n[j] += 1
+            for i in range(n):
+                if moved[i]:
+                    for m in range(near_n[i]):
+                        obs_valid[near_idx[i, m]] = False
 
             # 3. work count (working as left by step t - 1, current centre)
             n_t = 0
@@ -759,8 +790,12 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         a = min(max(100.0 * (target - x[tr, i]), -V_MAX), V_MAX)
                         att_x = a * c
                         att_y = -a * s
-                    obs_x, obs_y = obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx,
-                                                   ray_cos, ray_sin)
+                    if not obs_valid[i]:
+                        obs_x_last[i], obs_y_last[i] = obstacle_vector(
+                            tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin)
+                        obs_valid[i] = True
+                    obs_x = obs_x_last[i]
+                    obs_y = obs_y_last[i]
                     fx = att_x + rep_x + obs_x
                     fy = att_y + rep_y + obs_y
                     if np.sqrt(fx * fx + fy * fy) > 0.5:

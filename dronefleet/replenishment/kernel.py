@@ -265,11 +265,14 @@ def wheels_from_force(fx, fy, mode):
 
 
 @njit(cache=True, inline='always')
-def pair_geometry(tr, i, j, x, y, dist, inv_dist, ux_pair, uy_pair):
+def pair_geometry(tr, i, j, x, y, dist, ux_pair, uy_pair, rep_x_pair, rep_y_pair):
     """Store the distance of robots i, j of trial tr in ``dist`` (n, n) [m], FAR beyond reach.
 
-    For pairs closer than R_RAB also ``inv_dist`` (1 / d) and the unit vectors
-    ``ux_pair, uy_pair`` (n, n) from i to j and back (world frame).
+    For pairs closer than R_RAB also the unit vectors ``ux_pair, uy_pair``
+    (n, n) from i to j and back (world frame) and the repulsion terms
+    ``rep_*_pair[i, j]`` = magnitude x unit vector i -> j (world frame), the
+    magnitude being 1000 / rho (10 / rho)^24 with rho = 100 d [cm], capped at
+    LJ_CAP. (Coincident centres are handled by the caller.)
     """
     dx = x[tr, j] - x[tr, i]
     dy = y[tr, j] - y[tr, i]
@@ -287,8 +290,15 @@ def pair_geometry(tr, i, j, x, y, dist, inv_dist, ux_pair, uy_pair):
         uy_pair[i, j] = dy * inv
         ux_pair[j, i] = -dx * inv
         uy_pair[j, i] = -dy * inv
-        inv_dist[i, j] = inv
-        inv_dist[j, i] = inv
+        q = 0.1 * inv
+        q2 = q * q
+        q4 = q2 * q2
+        q8 = q4 * q4
+        magnitude = min(10.0 * inv * (q8 * q8 * q8), LJ_CAP)
+        rep_x_pair[i, j] = magnitude * ux_pair[i, j]
+        rep_y_pair[i, j] = magnitude * uy_pair[i, j]
+        rep_x_pair[j, i] = magnitude * ux_pair[j, i]
+        rep_y_pair[j, i] = magnitude * uy_pair[j, i]
 
 
 # ------------------------------------------------------------------ supervisor VM
@@ -495,9 +505,10 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
 
     # --- scratch (per trial, reused every tick)
     dist = np.zeros((n, n))
-    inv_dist = np.zeros((n, n))           # 1 / d, pairs closer than R_RAB
     ux_pair = np.zeros((n, n))            # unit vector i -> j (world), pairs closer than R_RAB
     uy_pair = np.zeros((n, n))
+    rep_x_pair = np.zeros((n, n))         # repulsion of j on i (world), pairs closer than R_RAB
+    rep_y_pair = np.zeros((n, n))
     near_n = np.zeros(n, dtype=np.int64)  # robots a ray of i can reach
     near_idx = np.zeros((n, n), dtype=np.int64)
     range_n = np.zeros(n, dtype=np.int64)  # robots closer than R_RAB, ascending index
@@ -564,7 +575,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             for i in range(n):
                 for j in range(i + 1, n):
                     if moved[i] or moved[j]:
-                        pair_geometry(tr, i, j, x, y, dist, inv_dist, ux_pair, uy_pair)
+                        pair_geometry(tr, i, j, x, y, dist, ux_pair, uy_pair, rep_x_pair,
+                                      rep_y_pair)
                     d = dist[i, j]
                     if d < R_RAB:
                         range_idx[i, range_n[i]] = j
@@ -639,14 +651,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         rep_wy += LJ_CAP * s
                     else:
                         rho[j] = r_cm
-                        # 1000 / rho * (10 / rho)^24 with rho = 100 d
-                        q = 0.1 * inv_dist[i, j]
-                        q2 = q * q
-                        q4 = q2 * q2
-                        q8 = q4 * q4
-                        magnitude = min(10.0 * inv_dist[i, j] * (q8 * q8 * q8), LJ_CAP)
-                        rep_wx -= magnitude * ux_pair[i, j]
-                        rep_wy -= magnitude * uy_pair[i, j]
+                        rep_wx -= rep_x_pair[i, j]
+                        rep_wy -= rep_y_pair[i, j]
                 rep_x = 0.0
                 rep_y = 0.0
                 if n_heard > 0:
@@ -673,7 +679,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                             dist_mc = rho[p]
                         else:
                             provider[tr, i] = -1
-                            for j in range(n):
+                            for m in range(range_n[i]):     # only those can be heard
+                                j = range_idx[i, m]
                                 if heard[j] and msg_state[cur, tr, j] == MSG_CHARGER \
                                         and msg_to[cur, tr, j] == i and rho[j] < dist_mc:
                                     provider[tr, i] = j
@@ -692,7 +699,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         # pairing happens only while sharing (as in the code's Update())
                         if served[tr, i] < 0 and colour == TRANSFER:
                             best = np.inf
-                            for j in range(n):
+                            for m in range(range_n[i]):
+                                j = range_idx[i, m]
                                 if heard[j] and msg_state[cur, tr, j] == MSG_WORKER \
                                         and msg_req[cur, tr, j] and msg_from[cur, tr, j] < 0 \
                                         and rho[j] < best:

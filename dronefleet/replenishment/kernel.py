@@ -264,41 +264,29 @@ def wheels_from_force(fx, fy, mode):
     return s2, s1, mode
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def pair_geometry(tr, i, j, x, y, dist, ux_pair, uy_pair, rep_x_pair, rep_y_pair):
-    """Store the distance of robots i, j of trial tr in ``dist`` (n, n) [m], FAR beyond reach.
+@njit(cache=True, error_model="numpy")
+def pair_geometry(dx, dy):
+    """Distance, unit vector and repulsion magnitude of the offset (dx, dy) [m] from i to j.
 
-    For pairs closer than R_RAB also the unit vectors ``ux_pair, uy_pair``
-    (n, n) from i to j and back (world frame) and the repulsion terms
-    ``rep_*_pair[i, j]`` = magnitude x unit vector i -> j (world frame), the
-    magnitude being 1000 / rho (10 / rho)^24 with rho = 100 d [cm], capped at
-    LJ_CAP. (Coincident centres are handled by the caller.)
+    Returns ``(d, ux, uy, magnitude)``: d [m] (FAR beyond RANGE2_FILTER); for
+    d < R_RAB also the unit vector (0, 0 for coincident centres) and the
+    repulsion magnitude 1000 / rho (10 / rho)^24 with rho = 100 d [cm], capped
+    at LJ_CAP (coincident centres are handled by the caller). The reverse pair
+    has the negated vector, exactly. Scalars only: array arguments would cost
+    reference counting in the pair loop.
     """
-    dx = x[tr, j] - x[tr, i]
-    dy = y[tr, j] - y[tr, i]
     d2 = dx * dx + dy * dy
     if d2 > RANGE2_FILTER:
-        dist[i, j] = FAR
-        dist[j, i] = FAR
-        return
+        return FAR, 0.0, 0.0, 0.0
     d = np.sqrt(d2)
-    dist[i, j] = d
-    dist[j, i] = d
-    if d < R_RAB:
-        inv = 1.0 / d if d > 0.0 else 0.0
-        ux_pair[i, j] = dx * inv
-        uy_pair[i, j] = dy * inv
-        ux_pair[j, i] = -dx * inv
-        uy_pair[j, i] = -dy * inv
-        q = 0.1 * inv
-        q2 = q * q
-        q4 = q2 * q2
-        q8 = q4 * q4
-        magnitude = min(10.0 * inv * (q8 * q8 * q8), LJ_CAP)
-        rep_x_pair[i, j] = magnitude * ux_pair[i, j]
-        rep_y_pair[i, j] = magnitude * uy_pair[i, j]
-        rep_x_pair[j, i] = magnitude * ux_pair[j, i]
-        rep_y_pair[j, i] = magnitude * uy_pair[j, i]
+    if not d < R_RAB:
+        return d, 0.0, 0.0, 0.0
+    inv = 1.0 / d if d > 0.0 else 0.0
+    q = 0.1 * inv
+    q2 = q * q
+    q4 = q2 * q2
+    q8 = q4 * q4
+    return d, dx * inv, dy * inv, min(10.0 * inv * (q8 * q8 * q8), LJ_CAP)
 
 
 # ------------------------------------------------------------------ supervisor VM
@@ -575,8 +563,19 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             for i in range(n):
                 for j in range(i + 1, n):
                     if moved[i] or moved[j]:
-                        pair_geometry(tr, i, j, x, y, dist, ux_pair, uy_pair, rep_x_pair,
-                                      rep_y_pair)
+                        d, ux, uy, magnitude = pair_geometry(x[tr, j] - x[tr, i],
+                                                             y[tr, j] - y[tr, i])
+                        dist[i, j] = d
+                        dist[j, i] = d
+                        if d < R_RAB:
+                            ux_pair[i, j] = ux
+                            uy_pair[i, j] = uy
+                            ux_pair[j, i] = -ux
+                            uy_pair[j, i] = -uy
+                            rep_x_pair[i, j] = magnitude * ux
+                            rep_y_pair[i, j] = magnitude * uy
+                            rep_x_pair[j, i] = -(magnitude * ux)
+                            rep_y_pair[j, i] = -(magnitude * uy)
                     d = dist[i, j]
                     if d < R_RAB:
                         range_idx[i, range_n[i]] = j

@@ -151,7 +151,13 @@ def low_threshold(x):
 
 @njit(cache=True, error_model="numpy")
 def _clamp_length(vx, vy, limit):
-    length = np.sqrt(vx * vx + vy * vy)
+    """(vx, vy) scaled down to length ``limit`` if longer."""
+    length2 = vx * vx + vy * vy
+    # sqrt is monotone and sqrt(limit * limit) == limit, so up to here the vector
+    # passes unchanged without the sqrt and divisions (a long dependency chain)
+    if length2 <= limit * limit:
+        return vx, vy
+    length = np.sqrt(length2)
     if length > limit:
         return vx * limit / length, vy * limit / length
     return vx, vy
@@ -805,7 +811,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     obs_y = obs_y_last[i]
                     fx = att_x + rep_x + obs_x
                     fy = att_y + rep_y + obs_y
-                    if np.sqrt(fx * fx + fy * fy) > 0.5:
+                    force2 = fx * fx + fy * fy
+                    # sqrt(force2) > 0.5 needs force2 > 0.25 (monotone, sqrt(0.25) = 0.5)
+                    if force2 > 0.25 and np.sqrt(force2) > 0.5:
                         wl, wr, new_mode = wheels_from_force(fx, fy, mode[tr, i])
                         mode[tr, i] = new_mode
                         if wheel_noise and (wl != 0.0 or wr != 0.0):

@@ -563,12 +563,12 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     obs_valid[i] = False
                     for m in range(near_n[i]):
                         obs_valid[near_idx[i, m]] = False
-            for i in range(n):
-                near_n[i] = 0
-                range_n[i] = 0
+            # The neighbour lists change only when a pair crosses R_RAB or RAY_REACH.
+            crossed = t == 1
             for i in range(n):
                 for j in range(i + 1, n):
                     if moved[i] or moved[j]:
+                        before = dist[i, j]
                         d, ux, uy, magnitude = pair_geometry(x[tr, j] - x[tr, i],
                                                              y[tr, j] - y[tr, i])
                         dist[i, j] = d
@@ -582,17 +582,26 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                             rep_y_pair[i, j] = magnitude * uy
                             rep_x_pair[j, i] = -(magnitude * ux)
                             rep_y_pair[j, i] = -(magnitude * uy)
-                    d = dist[i, j]
-                    if d < R_RAB:
-                        range_idx[i, range_n[i]] = j
-                        range_n[i] += 1
-                        range_idx[j, range_n[j]] = i
-                        range_n[j] += 1
-                    if d < RAY_REACH:
-                        near_idx[i, near_n[i]] = j
-                        near_n[i] += 1
-                        near_idx[j, near_n[j]] = i
-                        near_n[j] += 1
+                        if (before < R_RAB) != (d < R_RAB) \
+                                or (before < RAY_REACH) != (d < RAY_REACH):
+                            crossed = True
+            if crossed:
+                for i in range(n):
+                    near_n[i] = 0
+                    range_n[i] = 0
+                for i in range(n):
+                    for j in range(i + 1, n):
+                        d = dist[i, j]
+                        if d < R_RAB:
+                            range_idx[i, range_n[i]] = j
+                            range_n[i] += 1
+                            range_idx[j, range_n[j]] = i
+                            range_n[j] += 1
+                        if d < RAY_REACH:
+                            near_idx[i, near_n[i]] = j
+                            near_n[i] += 1
+                            near_idx[j, near_n[j]] = i
+                            near_n[j] += 1
             for i in range(n):
                 if moved[i]:
                     for m in range(near_n[i]):

@@ -203,23 +203,24 @@ def _wall_hit(s, u):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin):
-    """o of section 4 for robot i of trial tr, in its own frame [cm/s].
+def obstacle_vector(tr, i, c, s, n_near, x, y, near_idx, ray_cos, ray_sin):
+    """o of section 4 for robot i of trial tr, heading (cos, sin) = (c, s), in its frame [cm/s].
 
     Rays reach 0.135 m from the centre, so only walls that close and the
-    ``near_idx[i, :near_n[i]]`` robots (centres closer than RAY_REACH) are
-    tested; a robot with neither reads nothing.
+    ``near_idx[i, :n_near]`` robots (centres closer than RAY_REACH) are
+    tested; a robot with neither reads nothing. (Few array arguments: each
+    costs reference counting per call.)
     """
     ox = 0.0
     oy = 0.0
     reach = RADIUS + RAY_LENGTH
     near_x_wall = abs(x[tr, i]) >= WALL - reach
     near_y_wall = abs(y[tr, i]) >= WALL - reach
-    if not near_x_wall and not near_y_wall and near_n[i] == 0:
+    if not near_x_wall and not near_y_wall and n_near == 0:
         return 0.0, 0.0
     for k in range(8):
-        ux = ct[tr, i] * ray_cos[k] - st[tr, i] * ray_sin[k]
-        uy = st[tr, i] * ray_cos[k] + ct[tr, i] * ray_sin[k]
+        ux = c * ray_cos[k] - s * ray_sin[k]
+        uy = s * ray_cos[k] + c * ray_sin[k]
         sx = x[tr, i] + RADIUS * ux
         sy = y[tr, i] + RADIUS * uy
         d = 1.0
@@ -227,7 +228,7 @@ def obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin):
             d = _wall_hit(sx, ux)
         if near_y_wall:
             d = min(d, _wall_hit(sy, uy))
-        for m in range(near_n[i]):
+        for m in range(n_near):
             j = near_idx[i, m]
             d = min(d, _ray_hit(sx, sy, ux, uy, x[tr, j], y[tr, j]))
         if d <= RAY_LENGTH:
@@ -814,7 +815,7 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         att_y = -a * s
                     if not obs_valid[i]:
                         obs_x_last[i], obs_y_last[i] = obstacle_vector(
-                            tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin)
+                            tr, i, c, s, near_n[i], x, y, near_idx, ray_cos, ray_sin)
                         obs_valid[i] = True
                     obs_x = obs_x_last[i]
                     obs_y = obs_y_last[i]

@@ -80,12 +80,12 @@ APPROACH_CM = 8.07       # the worker with MC stops this far from its provider [
 # ------------------------------------------------------------------ random numbers
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def _rotl(x, k):
     return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, inline='always')
 def next_u64(rng, trial, stream):
     """xoshiro256** step of ``rng[trial, stream]`` (uint64[4]); returns uint64."""
     s0 = rng[trial, stream, 0]
@@ -100,13 +100,13 @@ def next_u64(rng, trial, stream):
     return result
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, inline='always')
 def uniform(rng, trial, stream):
     """Uniform double in [0, 1) with 53 random bits."""
     return np.float64(next_u64(rng, trial, stream) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, inline='always')
 def normal_pair(rng, trial, stream):
     """Two independent N(0, 1) draws (Marsaglia's polar method: one log, no sin/cos)."""
     while True:
@@ -121,7 +121,7 @@ def normal_pair(rng, trial, stream):
 # ------------------------------------------------------------------ geometry
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def floor_colour(gx, gy, mobile):
     """Colour under ground-sensor point (gx, gy) [m]; first match wins (section 1)."""
     if -0.825 <= gx <= -0.5 and abs(gy) <= 0.825:
@@ -133,23 +133,23 @@ def floor_colour(gx, gy, mobile):
     return WHITE
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def in_charging_rect(x, y):
     return -0.8 <= x <= -0.5 and abs(y) <= 0.8
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def in_work_rect(x, y):
     return 0.5 <= x <= 0.8 and abs(y) <= 0.8
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def low_threshold(x):
     """E_low(x): return cost at full speed from centre x plus a 10-unit margin."""
     return (x + 0.5) / 0.12 * (10.0 * 0.1) + 10.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def _clamp_length(vx, vy, limit):
     """(vx, vy) scaled down to length ``limit`` if longer."""
     length2 = vx * vx + vy * vy
@@ -163,7 +163,7 @@ def _clamp_length(vx, vy, limit):
     return vx, vy
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def _wrap(theta):
     if theta > PI:
         return theta - 2.0 * PI
@@ -172,7 +172,7 @@ def _wrap(theta):
     return theta
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def _ray_hit(sx, sy, ux, uy, cx, cy):
     """Distance along the unit ray (s, u) to the disc at c, or 1.0 (no hit within reach).
 
@@ -192,7 +192,7 @@ def _ray_hit(sx, sy, ux, uy, cx, cy):
     return -b - np.sqrt(disc)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def _wall_hit(s, u):
     """Distance along the unit ray (s, u) (one axis) to the inner wall face it heads for."""
     if u > 0.0:
@@ -202,7 +202,7 @@ def _wall_hit(s, u):
     return 1.0
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, inline='always')
 def obstacle_vector(tr, i, c, s, n_near, x, y, near_idx, ray_cos, ray_sin):
     """o of section 4 for robot i of trial tr, heading (cos, sin) = (c, s), in its frame [cm/s].
 
@@ -238,7 +238,7 @@ def obstacle_vector(tr, i, c, s, n_near, x, y, near_idx, ray_cos, ray_sin):
     return _clamp_length(ox / 8.0, oy / 8.0, V_MAX)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def wheels_from_force(fx, fy, mode):
     """Turning-mode update and wheel speeds (left, right) [cm/s] for force F (section 4)."""
     angle = atan2(fy, fx)
@@ -271,7 +271,7 @@ def wheels_from_force(fx, fy, mode):
     return s2, s1, mode
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def pair_geometry(dx, dy):
     """Distance, unit vector and repulsion magnitude of the offset (dx, dy) [m] from i to j.
 
@@ -299,7 +299,7 @@ def pair_geometry(dx, dy):
 # ------------------------------------------------------------------ supervisor VM
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, inline='always')
 def apply_uncontrollable(tables, n_sup, role, states, unc_order, n_unc, conditions):
     """Apply each true uncontrollable event in the file's order (section 5.1, step 2).
 
@@ -319,7 +319,7 @@ def apply_uncontrollable(tables, n_sup, role, states, unc_order, n_unc, conditio
     return changed
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, inline='always')
 def choose_controllable(tables, n_sup, role, states, ctrl_order, n_ctrl, enabled, rng, tr):
     """The controllable event enabled in every supervisor (uniform pick among several), or -1.
 
@@ -348,7 +348,7 @@ def choose_controllable(tables, n_sup, role, states, ctrl_order, n_ctrl, enabled
 # ------------------------------------------------------------------ energy
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, inline='always')
 def transfer_source(tr, i, nw, sharing, served, mc_rank, dist):
     """The MC that transfers to charging worker i this tick, or -1 (section 7, step 6).
 
@@ -370,7 +370,7 @@ def transfer_source(tr, i, nw, sharing, served, mc_rank, dist):
 # ------------------------------------------------------------------ the kernel
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def place_robots(rng, tr, x, y, th):
     """Initial placement of trial tr (section 1): rejection sampling in the base."""
     n = x.shape[1]
@@ -392,7 +392,7 @@ def place_robots(rng, tr, x, y, th):
                 break
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_noise,
                tables, n_sup, init_states, unc_order, n_unc, ctrl_order, n_ctrl,
                mc_rank, rng, trace):

@@ -3,8 +3,9 @@
 Short runs (4 trials x 1500 ticks) of the fixed strategy and of 6 mobile
 chargers (phi = 2), plus a run where transfers lose half their energy; each
 per-trial summary column and the time series must give exactly these SHA-256
-digests (of the little-endian array bytes). Any speed-up of the kernel must
-keep them; an intentional change of the model's numbers regenerates them with
+digests (of the little-endian array bytes). They were taken before the
+kernel's speed-ups of issue 11, which left every output bit unchanged; any
+later speed-up must keep them too; an intentional change of the model's numbers regenerates them with
 :func:`digests` and pastes the dict here.
 """
 

@@ -11,6 +11,12 @@ Only + - * / sqrt and the project's own transcendental functions
 (:mod:`dronefleet.fpmath`) touch the trajectory, so it is bit-identical on any
 CPU. Random numbers come from xoshiro256** streams (``rng[trial, stream]``).
 
+Most robots stand still most ticks, so work whose inputs did not change is
+reused rather than redone, never approximated: pair geometry only for pairs
+with a robot that moved, neighbour lists only when a pair crossed a range,
+obstacle rays only after the robot or one within ray reach moved. Any such
+change must leave tests/test_replenishment_fingerprints.py passing.
+
 Decisions go through a supervisor VM that executes the loaded tables
 (section 5.1); the only hand-written parts are the event conditions (5.2) and
 the controllable events' actions (5.3).

@@ -11,6 +11,12 @@ Only + - * / sqrt and the project's own transcendental functions
 (:mod:`dronefleet.fpmath`) touch the trajectory, so it is bit-identical on any
 CPU. Random numbers come from xoshiro256** streams (``rng[trial, stream]``).
 
+Most robots stand still most ticks, so work whose inputs did not change is
+reused rather than redone, never approximated: pair geometry only for pairs
+with a robot that moved, neighbour lists only when a pair crossed a range,
+obstacle rays only after the robot or one within ray reach moved. Any such
+change must leave tests/test_replenishment_fingerprints.py passing.
+
 Decisions go through a supervisor VM that executes the loaded tables
 (section 5.1); the only hand-written parts are the event conditions (5.2) and
 the controllable events' actions (5.3).
@@ -151,7 +157,13 @@ def low_threshold(x):
 
 @njit(cache=True)
 def _clamp_length(vx, vy, limit):
-    length = np.sqrt(vx * vx + vy * vy)
+    """(vx, vy) scaled down to length ``limit`` if longer."""
+    length2 = vx * vx + vy * vy
+    # sqrt is monotone and sqrt(limit * limit) == limit, so up to here the vector
+    # passes unchanged without the sqrt and divisions (a long dependency chain)
+    if length2 <= limit * limit:
+        return vx, vy
+    length = np.sqrt(length2)
     if length > limit:
         return vx * limit / length, vy * limit / length
     return vx, vy
@@ -197,23 +209,24 @@ def _wall_hit(s, u):
 
 
 @njit(cache=True, inline='always')
-def obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin):
-    """o of section 4 for robot i of trial tr, in its own frame [cm/s].
+def obstacle_vector(tr, i, c, s, n_near, x, y, near_idx, ray_cos, ray_sin):
+    """o of section 4 for robot i of trial tr, heading (cos, sin) = (c, s), in its frame [cm/s].
 
     Rays reach 0.135 m from the centre, so only walls that close and the
-    ``near_idx[i, :near_n[i]]`` robots (centres closer than RAY_REACH) are
-    tested; a robot with neither reads nothing.
+    ``near_idx[i, :n_near]`` robots (centres closer than RAY_REACH) are
+    tested; a robot with neither reads nothing. (Few array arguments: each
+    costs reference counting per call.)
     """
     ox = 0.0
     oy = 0.0
     reach = RADIUS + RAY_LENGTH
     near_x_wall = abs(x[tr, i]) >= WALL - reach
     near_y_wall = abs(y[tr, i]) >= WALL - reach
-    if not near_x_wall and not near_y_wall and near_n[i] == 0:
+    if not near_x_wall and not near_y_wall and n_near == 0:
         return 0.0, 0.0
     for k in range(8):
-        ux = ct[tr, i] * ray_cos[k] - st[tr, i] * ray_sin[k]
-        uy = st[tr, i] * ray_cos[k] + ct[tr, i] * ray_sin[k]
+        ux = c * ray_cos[k] - s * ray_sin[k]
+        uy = s * ray_cos[k] + c * ray_sin[k]
         sx = x[tr, i] + RADIUS * ux
         sy = y[tr, i] + RADIUS * uy
         d = 1.0
@@ -221,7 +234,7 @@ def obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx, ray_cos, ray_sin):
             d = _wall_hit(sx, ux)
         if near_y_wall:
             d = min(d, _wall_hit(sy, uy))
-        for m in range(near_n[i]):
+        for m in range(n_near):
             j = near_idx[i, m]
             d = min(d, _ray_hit(sx, sy, ux, uy, x[tr, j], y[tr, j]))
         if d <= RAY_LENGTH:
@@ -262,6 +275,31 @@ def wheels_from_force(fx, fy, mode):
     if angle > 0.0:
         return s1, s2, mode
     return s2, s1, mode
+
+
+@njit(cache=True)
+def pair_geometry(dx, dy):
+    """Distance, unit vector and repulsion magnitude of the offset (dx, dy) [m] from i to j.
+
+    Returns ``(d, ux, uy, magnitude)``: d [m] (FAR beyond RANGE2_FILTER); for
+    d < R_RAB also the unit vector (0, 0 for coincident centres) and the
+    repulsion magnitude 1000 / rho (10 / rho)^24 with rho = 100 d [cm], capped
+    at LJ_CAP (coincident centres are handled by the caller). The reverse pair
+    has the negated vector, exactly. Scalars only: array arguments would cost
+    reference counting in the pair loop.
+    """
+    d2 = dx * dx + dy * dy
+    if d2 > RANGE2_FILTER:
+        return FAR, 0.0, 0.0, 0.0
+    d = np.sqrt(d2)
+    if not d < R_RAB:
+        return d, 0.0, 0.0, 0.0
+    inv = 1.0 / d if d > 0.0 else 0.0
+    q = 0.1 * inv
+    q2 = q * q
+    q4 = q2 * q2
+    q8 = q4 * q4
+    return d, dx * inv, dy * inv, min(10.0 * inv * (q8 * q8 * q8), LJ_CAP)
 
 
 # ------------------------------------------------------------------ supervisor VM
@@ -468,13 +506,18 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
 
     # --- scratch (per trial, reused every tick)
     dist = np.zeros((n, n))
-    inv_dist = np.zeros((n, n))           # 1 / d, pairs closer than R_RAB
     ux_pair = np.zeros((n, n))            # unit vector i -> j (world), pairs closer than R_RAB
     uy_pair = np.zeros((n, n))
+    rep_x_pair = np.zeros((n, n))         # repulsion of j on i (world), pairs closer than R_RAB
+    rep_y_pair = np.zeros((n, n))
     near_n = np.zeros(n, dtype=np.int64)  # robots a ray of i can reach
     near_idx = np.zeros((n, n), dtype=np.int64)
     range_n = np.zeros(n, dtype=np.int64)  # robots closer than R_RAB, ascending index
     range_idx = np.zeros((n, n), dtype=np.int64)
+    moved = np.zeros(n, dtype=np.bool_)   # pose changed this tick
+    obs_valid = np.zeros(n, dtype=np.bool_)   # obs_*_last is the current obstacle vector
+    obs_x_last = np.zeros(n)
+    obs_y_last = np.zeros(n)
     heard = np.zeros(n, dtype=np.bool_)
     rho = np.zeros(n)
     conditions = np.zeros(N_EVENTS, dtype=np.bool_)
@@ -507,6 +550,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             nxt = t % 2             # messages set now, read at t + 1
             # 1. act + physics: last tick's wheel command
             for i in range(n):
+                # at tick 1 nothing of this trial's geometry is computed yet
+                moved[i] = t == 1 or left[tr, i] != 0.0 or right[tr, i] != 0.0
                 if left[tr, i] != 0.0 or right[tr, i] != 0.0:
                     v = (left[tr, i] + right[tr, i]) * 0.5 / 100.0
                     omega = (right[tr, i] - left[tr, i]) / 100.0 / AXLE
@@ -515,40 +560,59 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     th[tr, i] = _wrap(th[tr, i] + omega * DT)
                     ct[tr, i] = cos(th[tr, i])
                     st[tr, i] = sin(th[tr, i])
-            # pair geometry, shared by neighbours, rays and transfers
+            # pair geometry, shared by neighbours, rays and transfers. Only pairs
+            # with a robot that moved change; the others keep last tick's values.
+            # A robot's obstacle vector depends on its own pose and the robots within
+            # RAY_REACH, so it is recomputed only after it or one of those (before
+            # or after the move) moved.
             for i in range(n):
-                near_n[i] = 0
-                range_n[i] = 0
+                if moved[i]:
+                    obs_valid[i] = False
+                    for m in range(near_n[i]):
+                        obs_valid[near_idx[i, m]] = False
+            # The neighbour lists change only when a pair crosses R_RAB or RAY_REACH.
+            crossed = t == 1
             for i in range(n):
-                dist[i, i] = 0.0
                 for j in range(i + 1, n):
-                    dx = x[tr, j] - x[tr, i]
-                    dy = y[tr, j] - y[tr, i]
-                    d2 = dx * dx + dy * dy
-                    if d2 > RANGE2_FILTER:
-                        dist[i, j] = FAR
-                        dist[j, i] = FAR
-                        continue
-                    d = np.sqrt(d2)
-                    dist[i, j] = d
-                    dist[j, i] = d
-                    if d < R_RAB:
-                        range_idx[i, range_n[i]] = j
-                        range_n[i] += 1
-                        range_idx[j, range_n[j]] = i
-                        range_n[j] += 1
-                        inv = 1.0 / d if d > 0.0 else 0.0
-                        ux_pair[i, j] = dx * inv
-                        uy_pair[i, j] = dy * inv
-                        ux_pair[j, i] = -dx * inv
-                        uy_pair[j, i] = -dy * inv
-                        inv_dist[i, j] = inv
-                        inv_dist[j, i] = inv
-                    if d < RAY_REACH:
-                        near_idx[i, near_n[i]] = j
-                        near_n[i] += 1
-                        near_idx[j, near_n[j]] = i
-                        near_n[j] += 1
+                    if moved[i] or moved[j]:
+                        before = dist[i, j]
+                        d, ux, uy, magnitude = pair_geometry(x[tr, j] - x[tr, i],
+                                                             y[tr, j] - y[tr, i])
+                        dist[i, j] = d
+                        dist[j, i] = d
+                        if d < R_RAB:
+                            ux_pair[i, j] = ux
+                            uy_pair[i, j] = uy
+                            ux_pair[j, i] = -ux
+                            uy_pair[j, i] = -uy
+                            rep_x_pair[i, j] = magnitude * ux
+                            rep_y_pair[i, j] = magnitude * uy
+                            rep_x_pair[j, i] = -(magnitude * ux)
+                            rep_y_pair[j, i] = -(magnitude * uy)
+                        if (before < R_RAB) != (d < R_RAB) \
+                                or (before < RAY_REACH) != (d < RAY_REACH):
+                            crossed = True
+            if crossed:
+                for i in range(n):
+                    near_n[i] = 0
+                    range_n[i] = 0
+                for i in range(n):
+                    for j in range(i + 1, n):
+                        d = dist[i, j]
+                        if d < R_RAB:
+                            range_idx[i, range_n[i]] = j
+                            range_n[i] += 1
+                            range_idx[j, range_n[j]] = i
+                            range_n[j] += 1
+                        if d < RAY_REACH:
+                            near_idx[i, near_n[i]] = j
+                            near_n[i] += 1
+                            near_idx[j, near_n[j]] = i
+                            near_n[j] += 1
+            for i in range(n):
+                if moved[i]:
+                    for m in range(near_n[i]):
+                        obs_valid[near_idx[i, m]] = False
 
             # 3. work count (working as left by step t - 1, current centre)
             n_t = 0
@@ -608,14 +672,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         rep_wy += LJ_CAP * s
                     else:
                         rho[j] = r_cm
-                        # 1000 / rho * (10 / rho)^24 with rho = 100 d
-                        q = 0.1 * inv_dist[i, j]
-                        q2 = q * q
-                        q4 = q2 * q2
-                        q8 = q4 * q4
-                        magnitude = min(10.0 * inv_dist[i, j] * (q8 * q8 * q8), LJ_CAP)
-                        rep_wx -= magnitude * ux_pair[i, j]
-                        rep_wy -= magnitude * uy_pair[i, j]
+                        rep_wx -= rep_x_pair[i, j]
+                        rep_wy -= rep_y_pair[i, j]
                 rep_x = 0.0
                 rep_y = 0.0
                 if n_heard > 0:
@@ -642,7 +700,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                             dist_mc = rho[p]
                         else:
                             provider[tr, i] = -1
-                            for j in range(n):
+                            for m in range(range_n[i]):     # only those can be heard
+                                j = range_idx[i, m]
                                 if heard[j] and msg_state[cur, tr, j] == MSG_CHARGER \
                                         and msg_to[cur, tr, j] == i and rho[j] < dist_mc:
                                     provider[tr, i] = j
@@ -661,7 +720,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         # pairing happens only while sharing (as in the code's Update())
                         if served[tr, i] < 0 and colour == TRANSFER:
                             best = np.inf
-                            for j in range(n):
+                            for m in range(range_n[i]):
+                                j = range_idx[i, m]
                                 if heard[j] and msg_state[cur, tr, j] == MSG_WORKER \
                                         and msg_req[cur, tr, j] and msg_from[cur, tr, j] < 0 \
                                         and rho[j] < best:
@@ -759,11 +819,17 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         a = min(max(100.0 * (target - x[tr, i]), -V_MAX), V_MAX)
                         att_x = a * c
                         att_y = -a * s
-                    obs_x, obs_y = obstacle_vector(tr, i, x, y, ct, st, near_n, near_idx,
-                                                   ray_cos, ray_sin)
+                    if not obs_valid[i]:
+                        obs_x_last[i], obs_y_last[i] = obstacle_vector(
+                            tr, i, c, s, near_n[i], x, y, near_idx, ray_cos, ray_sin)
+                        obs_valid[i] = True
+                    obs_x = obs_x_last[i]
+                    obs_y = obs_y_last[i]
                     fx = att_x + rep_x + obs_x
                     fy = att_y + rep_y + obs_y
-                    if np.sqrt(fx * fx + fy * fy) > 0.5:
+                    force2 = fx * fx + fy * fy
+                    # sqrt(force2) > 0.5 needs force2 > 0.25 (monotone, sqrt(0.25) = 0.5)
+                    if force2 > 0.25 and np.sqrt(force2) > 0.5:
                         wl, wr, new_mode = wheels_from_force(fx, fy, mode[tr, i])
                         mode[tr, i] = new_mode
                         if wheel_noise and (wl != 0.0 or wr != 0.0):

@@ -7,6 +7,7 @@ the tick loop; :func:`dronefleet.replenishment.kernel.run_trials` does the rest.
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,15 @@ TRIAL_SEED_FACTOR = 876     # trial k (1-based) uses seed 876 k
 TRACE_MAX_BYTES = 2e9      # the trace is for tests and inspection, not for sweeps
 TRACE_NAMES = ("x", "y", "energy", "consumed", "flags", "event", "sup_states", "provider",
                "served", "msg_requesting", "msg_from", "msg_to", "received", "source")
+
+
+@functools.lru_cache(maxsize=None)
+def _default_supervisor(name):
+    """The 2024 supervisor file ``name`` of SUPERVISOR_FILES, parsed once per process.
+
+    Parsing the YAML takes longer than a short simulation; the automaton is only read.
+    """
+    return load_supervisor(SUPERVISOR_FILES[name])
 
 
 def trial_seeds(trials, first=1):
@@ -143,10 +153,10 @@ def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
                          f"is allowed: trace fewer trials or ticks")
     supervisors = dict(supervisors or {})
     worker_file = "worker-with-mobile-charger" if params.mobile else "worker"
-    worker = supervisors.get("worker") or load_supervisor(SUPERVISOR_FILES[worker_file])
+    worker = supervisors.get("worker") or _default_supervisor(worker_file)
     charger = None
     if params.mobile:
-        charger = supervisors.get("charger") or load_supervisor(SUPERVISOR_FILES["charger"])
+        charger = supervisors.get("charger") or _default_supervisor("charger")
     for automaton in (worker, charger):
         if automaton is not None and not isinstance(automaton, Automaton):
             raise TypeError(f"supervisors must be Automaton objects, got {type(automaton)!r}")

@@ -114,6 +114,11 @@ def check_outputs(out, save_fleet, overwrite, tables=None):
 
     if out.name in ("", ".."):  # "." and "/" normalised have no name: no sibling to write first
         raise OutputError(f"--out {str(out)!r} must name a folder of its own, e.g. results/runs/mine")
+    if out.is_symlink():  # the folder is replaced by a rename, which would replace the link, not its target
+        raise OutputError(f"--out {str(out)!r} is a symbolic link; give the folder itself")
+    if save_fleet is not None and Path(os.path.abspath(save_fleet)).is_relative_to(os.path.abspath(out)):
+        raise OutputError(f"--save-fleet {str(save_fleet)!r} lies inside --out {str(out)!r}, which is written "
+                          "(and replaced) whole; save the fleet outside it")
     with _writing(out):
         clean_leftovers(out)  # first: it may put back a run that a killed --overwrite had set aside
         state = run_dir_state(out, tables or TABLES)
@@ -145,7 +150,7 @@ def run(args):
     from .fleet import load_fleet, save_fleet, seeded_path
     from .metrics import run_metrics
     from .records import write_run
-    from .simulation import InvalidStateError, simulate
+    from .simulation import InvalidStateError, RunTooLargeError, simulate
     from .supervisor import SupervisorError
 
     fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None  # refused before any work
@@ -158,16 +163,24 @@ def run(args):
     start = time.perf_counter()
     try:
         result = simulate(config, progress=ProgressBar(config.horizon_s), fleet=fleet)
-    except (SupervisorError, InvalidStateError) as error:  # nothing is written: the tables come after
+    except (SupervisorError, InvalidStateError, RunTooLargeError) as error:  # nothing written: tables come after
         raise ConfigError(f"the run stopped: {error}") from None
     wall = time.perf_counter() - start
-    with _writing(out):
-        write_run(result, out, overwrite=args.overwrite)
+    # The fleet file first: if either write fails, neither output is left behind.
+    if fleet_out is not None:
+        with _writing(fleet_out):
+            saved = save_fleet(result, fleet_out)
+    try:
+        with _writing(out):
+            write_run(result, out, overwrite=args.overwrite)
+    except BaseException:
+        if fleet_out is not None:
+            fleet_out.unlink(missing_ok=True)
+        raise
     print(format_summary(run_metrics(result), wall))
     print(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
     if fleet_out is not None:
-        with _writing(fleet_out):
-            print(f"  {'saved fleet':<22}{save_fleet(result, fleet_out)}")
+        print(f"  {'saved fleet':<22}{saved}")
     return 0
 
 
@@ -210,6 +223,13 @@ def bounds(args):
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors on one line, like every other refusal (exit code 2)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 class _Version(argparse.Action):
     """``--version``: ``dronefleet <version> (commit <sha>)``; the commit is looked up only when asked."""
 
@@ -224,7 +244,7 @@ class _Version(argparse.Action):
 def build_parser(reproduce_arguments=True):
     """The parser; without ``reproduce_arguments`` the reproduce command is only listed, so that
     ``dronefleet --help`` and ``--version`` do not import pandas and numba (:mod:`dronefleet.reproduce`)."""
-    parser = argparse.ArgumentParser(prog="dronefleet", description=__doc__)
+    parser = _Parser(prog="dronefleet", description=__doc__)
     parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
     p = commands.add_parser("run", help="simulate one run and write its tables as parquet")
@@ -333,6 +353,12 @@ def main(argv=None):
     except ConfigError as error:  # bad input (config, sweep, fleet file): refused before any work
         print(f"dronefleet: error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: outputs are complete or absent (see records.write_run)
+        print("dronefleet: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # the reader of stdout went away (| head): stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # so the exit flush cannot fail
+        return 141
 
 
 if __name__ == "__main__":

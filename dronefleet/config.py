@@ -45,6 +45,8 @@ import dataclasses
 import difflib
 import json
 import math
+import os
+import stat
 import tomllib
 from dataclasses import dataclass, field
 from os import PathLike
@@ -598,6 +600,9 @@ def _read_toml(path: str | PathLike) -> dict[str, Any]:
     """The TOML document in ``path``; ConfigError if unreadable, too big, not UTF-8 or not TOML."""
     where = f"config file {str(path)!r}"
     try:
+        # Only a regular file: opening a pipe would wait for a writer for ever.
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            raise ConfigError(f"{where} is not a regular file (a folder, pipe or device); give a TOML file")
         with open(path, "rb") as fh:
             data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the path may be a device or a pipe
     except OSError as e:

@@ -40,6 +40,7 @@ class RunState:
     bid_rng: np.random.Generator
     mass_kg: np.ndarray
     period: int
+    max_attempts: int       # rows the attempt table may grow to (attempt_limit)
 
 
 @dataclass
@@ -63,6 +64,20 @@ class RunResult:
 
 class InvalidStateError(RuntimeError):
     """The engine met a state no event fits (non-finite input slipped through validation)."""
+
+
+class RunTooLargeError(RuntimeError):
+    """The run made far more delivery attempts than it has orders (see :func:`attempt_limit`)."""
+
+
+def attempt_limit(config):
+    """Most delivery attempts a run of ``config`` may make: max(200000, 4 x expected orders).
+
+    A sound run makes about 1.3 attempts per order (the paper's: ~7,000); only degenerate
+    configs (UAVs that take off with an empty battery, abort at once and bid again at the next
+    tick) come near the bound, and they would otherwise fill memory for minutes.
+    """
+    return max(200_000, 4 * math.ceil(config.horizon_s / config.tau_s))
 
 
 #: First element of the spawn key of the streams of periods after the first (an unused child).
@@ -151,7 +166,7 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
         rule=RULES[config.base_rule].code if rule.reserves else rule.code, bids_on=bids_on,
         reserves=rule.reserves)
     return RunState(book, fleet, _attempt_table(max(64, n)), series, counters, params, table,
-                    bid_rng, orders.mass_kg, period)
+                    bid_rng, orders.mass_kg, period, max(attempt_limit(config), 64, n))
 
 
 def _attempt_table(capacity, old=None):
@@ -180,7 +195,13 @@ def advance(state, t_stop):
         if status == engine.DONE:
             return
         if status == engine.ATTEMPTS_FULL:
-            state.attempts = _attempt_table(2 * state.attempts.uav.shape[0], state.attempts)
+            capacity = state.attempts.uav.shape[0]
+            if capacity >= state.max_attempts:
+                raise RunTooLargeError(
+                    f"the run made more than {capacity} delivery attempts by t = {t_stop:.0f} s "
+                    f"(at most max(200000, 4 x expected orders) = {state.max_attempts} allowed): a degenerate "
+                    "config, e.g. a threshold so low that UAVs with an empty battery keep taking off")
+            state.attempts = _attempt_table(min(2 * capacity, state.max_attempts), state.attempts)
             continue
         if status == engine.INVALID_STATE:
             bad = np.flatnonzero(np.isnan(state.fleet.next_s)).tolist()

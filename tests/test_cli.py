@@ -80,3 +80,87 @@ def test_a_run_the_engine_stops_ends_in_one_line_and_writes_nothing(tmp_path, ca
     err = capsys.readouterr().err
     assert err.splitlines() == ["dronefleet: error: the run stopped: UAV 3 has a NaN event time"]
     assert not out.exists() and not any(p.name.startswith(".") for p in tmp_path.iterdir())
+
+
+def _refused(capsys, argv, fragment):
+    try:
+        code = cli.main(argv)
+    except SystemExit as stop:  # argparse
+        code = stop.code
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err
+    assert len(err.splitlines()) == 1 and fragment in err, err
+
+
+def test_usage_errors_are_one_line(capsys):
+    _refused(capsys, ["run", "--seed", "1e3"], "argument --seed: invalid int value: '1e3' (see dronefleet run --help)")
+    _refused(capsys, ["reproduce", "fig99"], "invalid choice: 'fig99'")
+
+
+def test_a_config_that_is_a_pipe_is_refused_not_waited_on(tmp_path, capsys):
+    import os
+    fifo = tmp_path / "c.toml"
+    os.mkfifo(fifo)
+    _refused(capsys, ["run", str(fifo), "--out", str(tmp_path / "out")], "is not a regular file")
+    assert not (tmp_path / "out").exists()
+
+
+def test_out_as_a_symlink_and_a_fleet_inside_out_are_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    from dronefleet import simulation
+    monkeypatch.setattr(simulation, "simulate", lambda *a, **k: pytest.fail("simulated"))
+    (tmp_path / "loop").symlink_to(tmp_path / "loop")
+    _refused(capsys, ["run", *SHORT, "--out", str(tmp_path / "loop")], "is a symbolic link")
+    out = tmp_path / "out"
+    _refused(capsys, ["run", *SHORT, "--out", str(out), "--save-fleet", str(out / "fleet.parquet")],
+             "lies inside --out")
+    assert not out.exists()
+
+
+def test_a_degenerate_run_stops_at_the_attempt_limit_in_one_line(tmp_path, capsys, monkeypatch):
+    # theta = 0: a UAV with an empty battery takes off, aborts at once and bids again next tick.
+    monkeypatch.setattr(simulation_module(), "attempt_limit", lambda config: 5_000)
+    out = tmp_path / "out"
+    _refused(capsys, ["run", "--set", "rule=threshold", "--set", "theta=0", "--set", "advert_interval_s=0.05",
+                      "--set", "horizon_weeks=1", "--out", str(out)], "delivery attempts")
+    assert not out.exists()
+
+
+def simulation_module():
+    from dronefleet import simulation
+    return simulation
+
+
+def test_a_failed_run_write_removes_the_fleet_file_written_before_it(tmp_path, capsys, monkeypatch):
+    import errno
+    from dronefleet import records
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(records, "write_run", full)
+    fleet = tmp_path / "fleet.parquet"
+    _refused(capsys, ["run", *SHORT, "--out", str(tmp_path / "out"), "--save-fleet", str(fleet)],
+             "No space left on device")
+    assert not fleet.exists() and not (tmp_path / "out").exists()
+
+
+def test_a_closed_stdout_ends_quietly(tmp_path):
+    import subprocess
+    import sys
+    proc = subprocess.Popen([sys.executable, "-m", "dronefleet.cli", "run", *SHORT, "--out", str(tmp_path / "o")],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.close()  # the reader went away, as with `| head -c1`
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141 and "Traceback" not in err, err
+
+
+def test_ctrl_c_ends_in_one_line_with_the_outputs_absent(tmp_path, capsys, monkeypatch):
+    from dronefleet import simulation
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(simulation, "simulate", interrupted)
+    assert cli.main(["run", *SHORT, "--out", str(tmp_path / "out")]) == 130
+    assert capsys.readouterr().err == "dronefleet: interrupted\n"
+    assert not (tmp_path / "out").exists()

@@ -206,7 +206,7 @@ HOSTILE = [
     ("config larger than 1 MB", config_file(b"# padding\n" * 100_001), "is larger than 1000000 bytes"),
     ("config nested too deeply", config_file(b"[run]\nx = " + b"[" * 100_000), "cannot parse config file"),
     ("config integer of 5000 digits", config_file(b"[fleet]\nn_uavs = " + b"9" * 5000), "cannot parse config file"),
-    ("config is a directory", lambda tmp_path: [str(tmp_path)], "cannot read config file"),
+    ("config is a directory", lambda tmp_path: [str(tmp_path)], "is not a regular file (a folder, pipe or device)"),
     ("config missing", lambda tmp_path: [str(tmp_path / "missing.toml")],
      "cannot read config file", ),
     ("config huge list", config_file(b"[policy]\nscaler_mean = [" + b"1.0, " * 100_000 + b"]"),

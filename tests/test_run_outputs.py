@@ -205,13 +205,22 @@ def test_a_failed_write_leaves_the_folder_as_it_was(old_run, tmp_path, capsys, m
     assert _tree(tmp_path) == before  # the old run, or nothing; no hidden temporary
 
 
-def test_a_failed_fleet_save_leaves_no_fleet_file(tmp_path, capsys, monkeypatch):
-    _failing_after(monkeypatch, len(records.TABLES), OSError(errno.ENOSPC, "No space left on device"))
+def test_a_failed_fleet_save_leaves_no_fleet_file_and_no_run(tmp_path, capsys, monkeypatch):
+    # The fleet file is written first, so a disk that is full then leaves neither output.
+    _failing_after(monkeypatch, 0, OSError(errno.ENOSPC, "No space left on device"))
     fleet = tmp_path / "fleets" / "fleet.parquet"
     code, _, err = _run([*SHORT, "--out", str(tmp_path / "run"), "--save-fleet", str(fleet)], capsys)
     _assert_refused(code, err, f"cannot write {str(fleet)!r}: No space left on device")
     assert list(fleet.parent.iterdir()) == []
-    assert records.run_dir_state(tmp_path / "run") == "complete"  # written before, and complete
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_failed_run_write_after_the_fleet_removes_the_fleet_file(tmp_path, capsys, monkeypatch):
+    _failing_after(monkeypatch, 2, OSError(errno.ENOSPC, "No space left on device"))  # fleet, 1 table, full
+    fleet = tmp_path / "fleets" / "fleet.parquet"
+    code, _, err = _run([*SHORT, "--out", str(tmp_path / "run"), "--save-fleet", str(fleet)], capsys)
+    _assert_refused(code, err, "No space left on device")
+    assert list(fleet.parent.iterdir()) == [] and not (tmp_path / "run").exists()
 
 
 # ---------------------------------------------------------------------------- --overwrite, SIGKILL

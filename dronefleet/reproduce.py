@@ -200,7 +200,17 @@ def _read(study, figure, name):
     path = study.root / figure / f"{name}.parquet"
     if not path.exists():
         raise SweepError(f"{path} is missing: run dronefleet reproduce {figure} without --redraw first")
-    return pd.read_parquet(path)
+    return _read_parquet(path, figure)
+
+
+def _read_parquet(path, figure):
+    """The table ``path`` of ``figure``; a file that is not parquet (corrupt, cut short) is one SweepError line."""
+    try:
+        return pd.read_parquet(path)
+    except (OSError, ValueError, pa.ArrowException) as error:  # ArrowInvalid is a ValueError
+        first = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise SweepError(f"{path} cannot be read as a parquet table ({first}): run dronefleet reproduce "
+                         f"{figure} without --check or --redraw to write it again") from None
 
 
 def _draw(draw, table, path, title):
@@ -370,7 +380,7 @@ def check(figure, results="results", quick=False, log=print):
     if not path.exists():
         raise SweepError(f"{path} is missing: run dronefleet reproduce {figure}{' --quick' if quick else ''} "
                          "first (it writes the table that --check compares with)")
-    committed = pd.read_parquet(path)
+    committed = _read_parquet(path, figure)
     rows = {(name, run): row for name, run, row in zip(committed["sweep"], committed["run"],
                                                         committed.to_dict("records"))}
     chosen = [key for key in CHECK_RUNS[figure] if key in rows]

@@ -29,6 +29,7 @@ The dataset of a sweep, under ``<results>/<name>/``::
 
     <table>/<key>=<value>/.../seed=<N>/part-0.parquet   one file per run and table
     _failed/<run id>.json                               runs that raised or whose worker died, with the error
+    _layout.json                                        the partition keys: a sweep of other keys is refused
     collected.parquet                                   `sweep collect`: one row per run
     <name>.sbatch, _logs/                               `sweep plan`: job-array script, its logs
 
@@ -59,6 +60,7 @@ import sys
 import time
 import tomllib
 import traceback
+from contextlib import suppress
 from dataclasses import dataclass, fields
 from pathlib import Path
 from urllib.parse import quote
@@ -68,6 +70,10 @@ from .config import PARAMETERS, Config, ConfigError, default_config, load_config
 #: Environment variables that give a job-array task's index, with the index of the
 #: scheduler's first task: SGE and LSF arrays start at 1, so their task k is index k + 1.
 TASK_VARIABLES = (("SLURM_ARRAY_TASK_ID", 0), ("PBS_ARRAY_INDEX", 0), ("SGE_TASK_ID", 1), ("LSB_JOBINDEX", 1))
+
+#: The most runs one sweep may hold: checked (from the grid's sizes) before any run's config
+#: is built, so a typo in a seed count is refused at once, not after hours or a MemoryError.
+MAX_RUNS = 100_000
 
 _SECTIONS = ("sweep", "set", "grid")
 _SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task")
@@ -204,6 +210,9 @@ def _seeds(value, where: str) -> tuple:
         if not all(isinstance(x, int) and not isinstance(x, bool) for x in (start, count)) or count < 1:
             raise SweepError(f"{where}: a range is {{ start = <integer>, count = <integer >= 1> }}, "
                              f"got {value!r}", ["seed"])
+        if count > MAX_RUNS:  # before the tuple is built: a count of 10**12 would exhaust memory
+            raise SweepError(f"{where}: count = {count} seeds is more than a sweep may run: "
+                             f"at most {MAX_RUNS:,} runs per sweep", ["seed"])
         return tuple(range(start, start + count))
     if isinstance(value, list) and value:
         if (seed := _repeated(value)) is not None:
@@ -258,6 +267,11 @@ def load_sweep(path, changes=None, seeds=None) -> Sweep:
     if both:
         raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in [grid]", both)
     seeds = _seeds(head.get("seeds") if seeds is None else list(seeds), f"{path}: [sweep] seeds")
+    n_runs = math.prod(len(values) for values in grid.values()) * len(seeds)
+    if n_runs > MAX_RUNS:
+        factors = " x ".join([*(f"{len(values)} {key}" for key, values in grid.items()), f"{len(seeds)} seeds"])
+        raise SweepError(f"{path}: {factors} = {n_runs:,} runs; a sweep may hold at most {MAX_RUNS:,} runs: "
+                         "split it into several sweeps (another [sweep] name each)")
 
     try:
         config = default_config() if base is None else load_config(path.parent / base)
@@ -374,6 +388,80 @@ def state(run: Run, out: Path) -> str:
     return "failed" if run.failure_path(out).exists() else "missing"
 
 
+# --------------------------------------------------------------------------- one partition layout per dataset
+
+#: In a dataset folder, the partition keys of its runs, written when its first runs start.
+LAYOUT_FILE = "_layout.json"
+
+
+def _found_layout(out: Path) -> tuple[str, ...] | None:
+    """The partition keys of the dataset ``out``: from its :data:`LAYOUT_FILE` or, in a dataset
+    written before that file existed, from its partition directories; None if it holds none."""
+    from .records import TABLES
+
+    record = out / LAYOUT_FILE
+    try:
+        if record.exists():
+            keys = json.loads(record.read_text(encoding="utf-8"))["keys"]
+            if not (isinstance(keys, list) and keys and all(isinstance(key, str) for key in keys)):
+                raise ValueError("keys is not a list of names")
+            return tuple(keys)
+        for table in TABLES:
+            keys, folder = [], out / table
+            while folder.is_dir():  # down the first partition directory of each level
+                folder = next((path for path in sorted(folder.iterdir()) if path.is_dir() and "=" in path.name
+                               and not path.name.startswith((".", "_"))), None)
+                if folder is None:
+                    break
+                keys.append(folder.name.split("=", 1)[0])
+            if keys:
+                return tuple(keys)
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise SweepError(f"cannot read the partition layout of the dataset {out} ({type(error).__name__}: {error}); "
+                         f"its {LAYOUT_FILE} holds {{\"keys\": [...]}}: fix or remove it") from None
+    return None
+
+
+def check_layout(sweep: Sweep, out: Path) -> None:
+    """Refuse a sweep whose partition keys differ from those of the dataset already in ``out``.
+
+    The grid decides the layout: a sweep of the same name with a grid key moved to [set]
+    would write a second layout beside the first, and readers of the folder would then see
+    runs twice (DuckDB refuses it: "Hive partition mismatch").
+    """
+    keys = sweep.runs[0].keys
+    found = _found_layout(out)
+    if found is not None and found != keys:
+        raise SweepError(f"{out} holds a dataset partitioned by {'/'.join(found)}; this sweep partitions by "
+                         f"{'/'.join(keys)}: use another [sweep] name or --results")
+
+
+def _record_layout(sweep: Sweep, out: Path) -> None:
+    """Write ``out``/:data:`LAYOUT_FILE` (atomically) if it is not there yet."""
+    from .records import write_atomic
+
+    record = out / LAYOUT_FILE
+    if not record.exists():
+        text = json.dumps({"keys": list(sweep.runs[0].keys)}) + "\n"
+        write_atomic(record, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+
+
+def _probe(folders, allowed: str, keep: bool = True) -> None:
+    """Refuse, before any run, folders that cannot be made or written (a file in the way, read-only),
+    leaving none made; ``allowed`` says what the flags must be. Without ``keep``, the folders
+    made to probe are removed again (a refusal that comes later then leaves nothing either)."""
+    from .cli import OutputError, _probe_folders
+
+    made = [path for folder in folders for path in (folder, *folder.parents) if not path.exists()]  # deepest first
+    try:
+        _probe_folders(folders)
+    except OutputError as error:
+        raise SweepError(f"{error}: {allowed}") from None
+    for path in [] if keep else made:
+        with suppress(OSError):
+            path.rmdir()
+
+
 # --------------------------------------------------------------------------- running a sweep
 
 
@@ -400,25 +488,30 @@ _NOT_AN_ARRAY = {"SGE_TASK_ID": "undefined", "LSB_JOBINDEX": "0"}
 def task_from_environment(environ=os.environ, n_tasks: int | None = None) -> int | None:
     """The 0-based job-array task given by the scheduler's variables (:data:`TASK_VARIABLES`), if any.
 
-    Every variable that is set is checked, and the first gives the task. A variable that is
-    unset, empty or holds its scheduler's "not an array" value (``SGE_TASK_ID=undefined``,
-    ``LSB_JOBINDEX=0``) gives none. Any other value must be ASCII digits naming one of the
-    ``n_tasks`` tasks (``0..n_tasks - 1``, or ``1..n_tasks`` for SGE and LSF, whose arrays
-    start at 1).
+    Every variable that is set is checked, and all that give a task must give the same one.
+    A variable that is unset or holds its scheduler's "not an array" value
+    (``SGE_TASK_ID=undefined``, ``LSB_JOBINDEX=0``) gives none. Any other value must be ASCII
+    digits naming one of the ``n_tasks`` tasks (``0..n_tasks - 1``, or ``1..n_tasks`` for SGE
+    and LSF, whose arrays start at 1).
 
     Raises
     ------
     SweepError
-        A value that is not such an index (``abc``, ``-1``, ``²``, beyond the array): running
-        the whole sweep, or the wrong task, in its place would be silently wrong.
+        A value that is not such an index (``abc``, ``-1``, ``²``, beyond the array, or empty:
+        a job script whose variable lost its value), or two variables that give different
+        tasks: running the whole sweep, or the wrong task, in its place would be silently wrong.
     """
-    tasks = []
+    tasks = {}   # variable -> the 0-based task it gives
     for variable, first in TASK_VARIABLES:
-        value = environ.get(variable, "")
-        if value in ("", _NOT_AN_ARRAY.get(variable)):
+        value = environ.get(variable)
+        if value is None or value == _NOT_AN_ARRAY.get(variable):
             continue
         last = None if n_tasks is None else first + n_tasks - 1
         allowed = f"an integer {first}-{last}" if last is not None else f"an integer >= {first}"
+        if value == "":
+            raise SweepError(f"{variable} is set but empty: expected {allowed}"
+                             + (f" ({n_tasks} tasks)" if n_tasks is not None else "")
+                             + f", or {variable} unset outside job arrays", [variable])
         # isdigit() alone takes '²' and other Unicode digits, which int() refuses; 19 digits and
         # more are beyond any array (and int() refuses thousands of them)
         index = int(value) if value.isascii() and value.isdigit() and len(value) < 19 else -1
@@ -426,8 +519,11 @@ def task_from_environment(environ=os.environ, n_tasks: int | None = None) -> int
             shown = repr(value) if len(value) <= 40 else f"{value[:40]!r}... ({len(value)} characters)"
             raise SweepError(f"{variable}={shown} is not a job-array task of this sweep: expected {allowed}"
                              + (f" ({n_tasks} tasks)" if n_tasks is not None else ""), [variable])
-        tasks.append(index - first)
-    return tasks[0] if tasks else None
+        tasks[variable] = index - first
+    if len(set(tasks.values())) > 1:
+        shown = " and ".join(f"{variable}={environ[variable]!r} (task {task})" for variable, task in tasks.items())
+        raise SweepError(f"{shown} give different job-array tasks: set only one scheduler's variable", list(tasks))
+    return next(iter(tasks.values()), None)
 
 
 def available_cpus() -> int:
@@ -479,6 +575,7 @@ def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | Non
 
     from . import executors
 
+    check_layout(sweep, out)
     todo = [run for run in runs if state(run, out) != "done"]
     out = out.absolute()  # workers may have another working directory
     function = partial(execute, out=out)
@@ -487,6 +584,7 @@ def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | Non
     else:  # connects here: an unreachable scheduler is refused before anything is written
         results = executors.dask(function, todo, scheduler, keys=[f"{sweep.name}/{run.id}" for run in todo])
     out.mkdir(parents=True, exist_ok=True)
+    _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
     failures = {}
     for finished, (run, error, crash) in enumerate(results, start=1):
         if crash is not None:
@@ -604,16 +702,23 @@ def dataset(sweep: Sweep, out, table: str):
 
 def _open(args) -> tuple[Sweep, Path]:
     sweep = load_sweep(args.sweep)
-    return sweep, Path(args.results) / sweep.name
+    out = Path(args.results) / sweep.name
+    check_layout(sweep, out)
+    return sweep, out
 
 
 def plan_command(args) -> int:
     """``dronefleet sweep plan``: print the runs and tasks, write the job-array script."""
     sweep, out = _open(args)
     script = Path(args.out) if args.out else out / f"{sweep.name}.sbatch"
-    (out / "_logs").mkdir(parents=True, exist_ok=True)  # SLURM does not create the log directory
-    script.parent.mkdir(parents=True, exist_ok=True)
-    script.write_text(job_script(sweep, Path(args.results), args.time, args.partition, args.account))
+    if script.is_dir():
+        raise SweepError(f"--out {str(script)!r} is a folder: give the path of the job-array script file")
+    # SLURM does not create the log directory; on refusal, nothing is left made
+    _probe([script.parent, out / "_logs"], "--out must be a file in a writable folder, --results a writable folder")
+    try:
+        script.write_text(job_script(sweep, Path(args.results), args.time, args.partition, args.account))
+    except OSError as error:
+        raise SweepError(f"cannot write the job-array script {str(script)!r}: {error.strerror or error}") from None
     print(f"sweep {sweep.name}: {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs")
     print(f"  job-array script  {script}")
     print(f"  submit it with    sbatch {script}")
@@ -632,6 +737,7 @@ def run_command(args) -> int:
     if args.scheduler is not None:
         check_scheduler(args.scheduler)
     runs = sweep.runs if task is None else sweep.task(task)
+    _probe([out], "--results must be a folder where files can be written", keep=False)
     jobs = args.jobs or (1 if task is not None else available_cpus())
     where = (f"on the Dask cluster at {args.scheduler}" if args.executor == "dask"
              else f"on {jobs} process{'es' if jobs > 1 else ''}")

@@ -7,6 +7,7 @@ give the same sweep and one partition layout; workers and the resource tracker e
 the sweep's process is killed.
 """
 
+import json
 import os
 import signal
 import subprocess
@@ -64,6 +65,9 @@ def refused(capsys, args, fragment, results):
     ("SGE_TASK_ID", "Undefined", "SGE_TASK_ID='Undefined'"),
     ("LSB_JOBINDEX", "-2", "LSB_JOBINDEX='-2'"),
     ("LSB_JOBINDEX", "4", "expected an integer 1-3"),
+    ("SLURM_ARRAY_TASK_ID", "", "SLURM_ARRAY_TASK_ID is set but empty: expected an integer 0-2 (3 tasks)"),
+    ("PBS_ARRAY_INDEX", "", "PBS_ARRAY_INDEX is set but empty"),   # not the whole sweep in every task
+    ("SGE_TASK_ID", "", "SGE_TASK_ID is set but empty: expected an integer 1-3"),
 ])
 def test_hostile_job_array_variables_are_refused_before_any_run(tmp_path, monkeypatch, capsys, no_array,
                                                                 variable, value, fragment):
@@ -71,8 +75,7 @@ def test_hostile_job_array_variables_are_refused_before_any_run(tmp_path, monkey
     refused(capsys, ["sweep", "run", str(SMOKE), "--results", str(tmp_path)], fragment, tmp_path)
 
 
-@pytest.mark.parametrize("variable, value", [("SGE_TASK_ID", "undefined"), ("LSB_JOBINDEX", "0"),
-                                             ("SLURM_ARRAY_TASK_ID", "")])
+@pytest.mark.parametrize("variable, value", [("SGE_TASK_ID", "undefined"), ("LSB_JOBINDEX", "0")])
 def test_outside_arrays_the_schedulers_values_give_no_task(variable, value):
     # SGE sets SGE_TASK_ID=undefined and LSF LSB_JOBINDEX=0 in a job that is not an array
     assert sw.task_from_environment({variable: value}, n_tasks=3) is None
@@ -81,6 +84,23 @@ def test_outside_arrays_the_schedulers_values_give_no_task(variable, value):
 def test_every_set_variable_is_checked_not_only_the_first():
     with pytest.raises(sw.SweepError, match="LSB_JOBINDEX='x'"):
         sw.task_from_environment({"SLURM_ARRAY_TASK_ID": "1", "LSB_JOBINDEX": "x"}, n_tasks=3)
+
+
+@pytest.mark.parametrize("environ, fragment", [
+    ({"SLURM_ARRAY_TASK_ID": "1", "SGE_TASK_ID": "1"},
+     "SLURM_ARRAY_TASK_ID='1' (task 1) and SGE_TASK_ID='1' (task 0) give different job-array tasks"),
+    ({"PBS_ARRAY_INDEX": "0", "LSB_JOBINDEX": "3"}, "PBS_ARRAY_INDEX='0' (task 0) and LSB_JOBINDEX='3' (task 2)"),
+])
+def test_variables_that_give_different_tasks_are_refused(tmp_path, monkeypatch, capsys, no_array, environ, fragment):
+    for variable, value in environ.items():
+        monkeypatch.setenv(variable, value)
+    refused(capsys, ["sweep", "run", str(SMOKE), "--results", str(tmp_path)], fragment, tmp_path)
+
+
+def test_variables_that_give_the_same_task_agree():
+    # SGE numbers from 1: its 2 is SLURM's 1; "not an array" values give no task to compare
+    assert sw.task_from_environment({"SLURM_ARRAY_TASK_ID": "1", "SGE_TASK_ID": "2", "LSB_JOBINDEX": "0"},
+                                    n_tasks=3) == 1
 
 
 @pytest.mark.parametrize("flags, fragment", [
@@ -123,6 +143,12 @@ def test_a_scheduler_that_does_not_answer_is_refused_within_the_timeout(tmp_path
     ("[sweep]\nseeds = [0]\n[grid]\nrule = ['nope']\n", "[grid] at rule = 'nope'"),
     ("[sweep]\nseeds = [0]\n[grid]\nnope = [1]\n", "nope"),
     ("[grid]\nrule = ['random']\n", "[sweep] seeds: give a non-empty list"),
+    # refused at once from the count, before a tuple of 10**12 seeds exhausts memory
+    ("[sweep]\nseeds = { start = 0, count = 1000000000000 }\n[grid]\nrule = ['random']\n",
+     "[sweep] seeds: count = 1000000000000 seeds is more than a sweep may run: at most 100,000 runs per sweep"),
+    ("[sweep]\nseeds = { start = 0, count = 100000 }\n[grid]\nrule = ['random', 'most_confident', "
+     "'least_confident']\ntau_minutes = [15, 20, 25, 30, 35, 40, 45, 50, 55, 60]\n",
+     "3 rule x 10 tau_minutes x 100000 seeds = 3,000,000 runs; a sweep may hold at most 100,000 runs"),
 ])
 def test_hostile_sweep_files_are_refused_before_any_run(tmp_path, capsys, no_array, text, fragment):
     path = tmp_path / "hostile.toml"
@@ -130,6 +156,75 @@ def test_hostile_sweep_files_are_refused_before_any_run(tmp_path, capsys, no_arr
     results = tmp_path / "results"
     results.mkdir()
     refused(capsys, ["sweep", "run", str(path), "--results", str(results)], fragment, results)
+
+
+def test_the_runs_cap_is_a_bound_on_the_runs_of_the_product(monkeypatch):
+    monkeypatch.setattr(sw, "MAX_RUNS", 8)       # smoke.toml: 2 rule x 2 tau_minutes x 2 seeds
+    assert len(sw.load_sweep(SMOKE).runs) == 8
+    monkeypatch.setattr(sw, "MAX_RUNS", 7)
+    with pytest.raises(sw.SweepError, match="= 8 runs; a sweep may hold at most 7 runs"):
+        sw.load_sweep(SMOKE)
+
+
+def snapshot(root):
+    """Every path under ``root`` with its size and modification time (folders too)."""
+    return {path: (path.stat().st_size, path.stat().st_mtime_ns) for path in root.rglob("*")}
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["run", "--results", "{tmp}/file"], "cannot write '{tmp}/file/smoke': Not a directory: "
+                                         "--results must be a folder where files can be written"),
+    (["run", "--results", "{tmp}/readonly"], "cannot write '{tmp}/readonly/smoke'"),
+    (["plan", "--results", "{tmp}/file"], "cannot write '{tmp}/file/smoke'"),
+    (["plan", "--results", "{tmp}/new", "--out", "{tmp}/folder"], "--out '{tmp}/folder' is a folder"),
+    (["plan", "--results", "{tmp}/new", "--out", "/dev/null/x"], "cannot write '/dev/null': Not a directory: "
+                                                                 "--out must be a file in a writable folder"),
+    (["plan", "--results", "{tmp}/new", "--out", "{tmp}/file/x.sbatch"], "cannot write '{tmp}/file'"),
+])
+def test_output_paths_that_cannot_be_written_are_refused_before_anything_is_made(tmp_path, capsys, no_array,
+                                                                                 args, fragment):
+    if "readonly" in args[2] and os.geteuid() == 0:
+        pytest.skip("root writes into a read-only folder")
+    (tmp_path / "file").write_text("a file where a folder belongs")
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "readonly").mkdir(mode=0o555)
+    before = snapshot(tmp_path)
+    args = [arg.format(tmp=tmp_path) for arg in args]
+    assert run_cli(["sweep", args[0], str(SMOKE), *args[1:]]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1 and fragment.format(tmp=tmp_path) in err, err
+    assert snapshot(tmp_path) == before  # no _logs, no dataset folder
+
+
+MOVED = 'rule = ["least_confident", "random"]\n'   # smoke.toml's rule, moved from [grid] to [set] below
+
+
+@pytest.mark.parametrize("dataset, fragment", [
+    ({"_layout.json": '{"keys": ["rule", "tau_minutes", "seed"]}\n'},
+     "smoke holds a dataset partitioned by rule/tau_minutes/seed; this sweep partitions by tau_minutes/seed: "
+     "use another [sweep] name or --results"),
+    # a dataset written before _layout.json: its layout comes from its partition directories
+    ({"summary/rule=random/tau_minutes=15.0/seed=0/part-0.parquet": "x"}, "partitioned by rule/tau_minutes/seed"),
+    ({"orders/rule=random/tau_minutes=15.0/seed=0/part-0.parquet": "x"}, "partitioned by rule/tau_minutes/seed"),
+    ({"_layout.json": "{not json"}, "cannot read the partition layout of the dataset"),
+    ({"_layout.json": '{"keys": "rule"}'}, "cannot read the partition layout of the dataset"),
+])
+@pytest.mark.parametrize("command", ["run", "plan", "status", "collect"])
+def test_a_sweep_of_another_partition_layout_is_refused_in_the_same_dataset(tmp_path, capsys, no_array,
+                                                                            dataset, fragment, command):
+    moved = tmp_path / "moved.toml"
+    text = SMOKE.read_text()
+    assert MOVED in text
+    moved.write_text(text.replace(MOVED, "").replace("[set]\n", '[set]\nrule = "random"\n'))
+    results = tmp_path / "results"
+    for name, content in dataset.items():
+        (results / "smoke" / name).parent.mkdir(parents=True, exist_ok=True)
+        (results / "smoke" / name).write_text(content)
+    before = snapshot(tmp_path)
+    assert run_cli(["sweep", command, str(moved), "--results", str(results)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1 and fragment in err, err
+    assert snapshot(tmp_path) == before
 
 
 # ---------------------------------------------------------------------------- what a sweep survives
@@ -179,6 +274,20 @@ def test_grid_keys_in_another_order_are_the_same_sweep_with_one_layout(tmp_path,
     layouts = {tuple(part.split("=")[0] for part in path.relative_to(results / "smoke" / "summary").parts[:-1])
                for path in (results / "smoke" / "summary").rglob("*.parquet")}
     assert layouts == {("rule", "tau_minutes", "seed")}
+    layout = results / "smoke" / "_layout.json"
+    assert json.loads(layout.read_text()) == {"keys": ["rule", "tau_minutes", "seed"]}  # written by the first run
+    # the same name with rule moved to [set]: refused, not a second layout beside the first
+    moved = tmp_path / "moved.toml"
+    moved.write_text(text.replace(rule_first, 'tau_minutes = [15.0, 30.0]\n').replace("[set]\n", '[set]\nrule = "random"\n'))
+    assert run_cli(["sweep", "run", str(moved), "--results", str(results), "--jobs", "1"]) == 2
+    assert "partitioned by rule/tau_minutes/seed; this sweep partitions by tau_minutes/seed" in capsys.readouterr().err
+    assert not (results / "smoke" / "summary" / "tau_minutes=15.0").exists()
+    # a dataset of before _layout.json: the layout is read from its folders, and recorded by the next run
+    layout.unlink()
+    assert run_cli(["sweep", "run", str(moved), "--results", str(results), "--jobs", "1"]) == 2
+    assert cli.main(["sweep", "run", str(SMOKE), "--results", str(results), "--jobs", "1"]) == 0
+    assert "ran 0, skipped 8 done before" in capsys.readouterr().out
+    assert json.loads(layout.read_text()) == {"keys": ["rule", "tau_minutes", "seed"]}
 
 
 # ---------------------------------------------------------------------------- a killed sweep leaves no process

@@ -60,3 +60,16 @@ def test_a_figure_without_its_runs_table_is_refused(tmp_path, capsys):
     assert cli.main(["reproduce", "fig17", "--check", "--results", str(tmp_path)]) == 2
     assert "fig17/runs.parquet is missing: run dronefleet reproduce fig17 first" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("figure, content", [("fig16", b"x\n"), ("fig16", b""), ("fig16", b"PAR1" * 3),
+                                             ("fig09", b"x\n")])
+def test_a_runs_table_that_is_not_parquet_is_refused_in_one_line(tmp_path, capsys, figure, content):
+    path = tmp_path / figure / "runs.parquet"
+    path.parent.mkdir()
+    path.write_bytes(content)
+    assert cli.main(["reproduce", figure, "--check", "--results", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"{path} cannot be read as a parquet table (" in err and f"run dronefleet reproduce {figure} " in err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == [figure, "runs.parquet"]  # nothing else written

@@ -142,10 +142,10 @@ def run(args):
     name = Path(args.config).stem if args.config else "paper"
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 
-    from .fleet import load_fleet, save_fleet, seeded_path
-    from .metrics import run_metrics
+    from .delivery.fleet import load_fleet, save_fleet, seeded_path
+    from .delivery.metrics import run_metrics
     from .records import write_run
-    from .simulation import InvalidStateError, simulate
+    from .delivery.simulation import InvalidStateError, simulate
     from .supervisor import SupervisorError
 
     fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None  # refused before any work

@@ -25,14 +25,14 @@ UAV can deliver once charged held, i.e. it delivered; null otherwise).
 ``fleet``: one row per UAV at the end of every week (and at the horizon): week int16, t_s,
 uav int16, soh, w_distance, w_mass, w_soc, intercept (policy on standardised features),
 steps (learner step counter t_), soc (null once lost), lost bool, decision_accuracy
-(:func:`dronefleet.metrics.decision_accuracy` of the policy then, on the run's test points),
+(:func:`dronefleet.delivery.metrics.decision_accuracy` of the policy then, on the run's test points),
 period int16 (operating period: 1, or the saved fleet's plus one for a warm start).
 
 ``timeseries``: t_s, delivered, unallocated, in_flight, aborted_attempts, idle, lost, reserved
 (int64 counts at that instant, after every event at it).
 
 ``summary``: one row: seed, rule, tau_minutes, n_uavs, horizon_weeks, period, then the metrics of
-:func:`dronefleet.metrics.run_metrics`.
+:func:`dronefleet.delivery.metrics.run_metrics`.
 """
 
 import errno
@@ -48,7 +48,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .config import SECONDS_PER_WEEK, config_from_dict
-from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
+from .delivery.engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
 from .provenance import stamp
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
@@ -105,7 +105,7 @@ def attempts_table(result):
 
 
 def fleet_table(result):
-    from .metrics import accuracy_points, decision_accuracy  # pandas: only for delivery's tables
+    from .delivery.metrics import accuracy_points, decision_accuracy  # pandas: only for delivery's tables
 
     columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
                                      "intercept", "steps", "soc", "lost", "decision_accuracy")}
@@ -137,7 +137,7 @@ def timeseries_table(result):
 
 
 def summary_table(result):
-    from .metrics import run_metrics
+    from .delivery.metrics import run_metrics
 
     c = result.config
     row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,

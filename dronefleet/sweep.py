@@ -297,7 +297,7 @@ def execute(run: Run, out: Path) -> str | None:
     returns None. Runs in worker processes, so it imports the engine here.
     """
     from .records import tables, write_table
-    from .simulation import simulate
+    from .delivery.simulation import simulate
 
     try:
         # Files of an interrupted attempt are replaced, not deleted first: two processes that
@@ -359,7 +359,7 @@ def state(run: Run, out: Path) -> str:
     Raises SweepError if the run's summary was made with another config (the sweep file
     changed since): new results would silently mix with old ones.
     """
-    from .fleet import seeded_path
+    from .delivery.fleet import seeded_path
     from .records import read_config
 
     summary = run.path(out, "summary")

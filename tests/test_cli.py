@@ -68,7 +68,8 @@ def test_progress_bar_draws_weeks_only_on_a_terminal():
 
 @pytest.mark.parametrize("error", ["SupervisorError", "InvalidStateError"])
 def test_a_run_the_engine_stops_ends_in_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch, error):
-    from dronefleet import simulation, supervisor
+    from dronefleet import supervisor
+    from dronefleet.delivery import simulation
     cls = {"SupervisorError": supervisor.SupervisorError, "InvalidStateError": simulation.InvalidStateError}[error]
 
     def stopped(*args, **kwargs):

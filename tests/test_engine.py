@@ -19,7 +19,8 @@ from conftest import (
     ALWAYS, DELTA, K, MU, NEVER, SHORT_ONLY, SIGMA, SPEED, WEEK, charged, next_grid, rate, run_state,
     scenario, scenario_config, x_std,
 )
-from dronefleet import config as cfg, engine, records, simulation
+from dronefleet import config as cfg, records
+from dronefleet.delivery import engine, simulation
 from dronefleet.supervisor import BUILTIN_CONTROLLER, SupervisorError
 
 # Local supervisor state of a UAV by engine mode once every event at an instant is processed.

@@ -8,8 +8,9 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import ALWAYS, NEVER, WEEK, rate, run_state, scenario, scenario_config
-from dronefleet.metrics import run_metrics
-from dronefleet import config as cfg, records, simulation
+from dronefleet.delivery.metrics import run_metrics
+from dronefleet import config as cfg, records
+from dronefleet.delivery import simulation
 
 SCHEMAS = {
     "orders": {"order_id": pa.int32(), "arrival_s": pa.float64(), "arrival_week": pa.int16(),

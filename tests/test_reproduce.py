@@ -7,8 +7,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from dronefleet import analysis, cli, records, reproduce, simulation, sweep
-from dronefleet.fleet import seeded_path
+from dronefleet import cli, records, reproduce, sweep
+from dronefleet.delivery import analysis, simulation
+from dronefleet.delivery.fleet import seeded_path
 
 pytest.importorskip("matplotlib")
 
@@ -134,7 +135,7 @@ def test_quick_sweeps_are_the_study_sweeps_with_fewer_seeds_and_weeks(tmp_path):
 
 
 def test_without_matplotlib_nothing_runs(tmp_path, monkeypatch, capsys):
-    from dronefleet import figures
+    from dronefleet.delivery import figures
 
     def missing():
         raise ImportError("drawing figures needs matplotlib: pip install 'dronefleet[plots]'")

@@ -11,10 +11,11 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import K, MU, SIGMA, WEEK, run_state, scenario, scenario_config, x_std
-from dronefleet import cli, config as cfg, engine, fleet as fleetfile, records, simulation
-from dronefleet.metrics import run_metrics
-from dronefleet.orders import generate_orders
-from dronefleet.policy import optimal_init, sgd_step
+from dronefleet import cli, config as cfg, records
+from dronefleet.delivery import engine, fleet as fleetfile, simulation
+from dronefleet.delivery.metrics import run_metrics
+from dronefleet.delivery.orders import generate_orders
+from dronefleet.delivery.policy import optimal_init, sgd_step
 
 STATE_RESERVED = 3  # the supervisor's state after wonBid (S0 -capableTask-> 1 -bid-> 2 -wonBid-> 3)
 

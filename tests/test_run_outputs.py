@@ -24,7 +24,8 @@ import pyarrow.parquet as pq
 import pytest
 
 import dronefleet
-from dronefleet import cli, provenance, records, reproduce, simulation
+from dronefleet import cli, provenance, records, reproduce
+from dronefleet.delivery import simulation
 from dronefleet.config import default_config, load_config, replace
 
 SHORT = ["--set", "horizon_weeks=0.05", "--set", "n_uavs=5"]

@@ -21,7 +21,8 @@ import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 import pytest
 
-from dronefleet import cli, simulation, sweep as sw
+from dronefleet import cli, sweep as sw
+from dronefleet.delivery import simulation
 from dronefleet.config import default_config, replace
 from dronefleet.records import TABLES
 

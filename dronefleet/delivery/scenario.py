@@ -1,7 +1,8 @@
 """The UAV delivery scenario behind the :mod:`dronefleet.scenarios` contract.
 
-A thin adaptor over the delivery modules where they are today (config, simulation,
-records, metrics, fleet, cli): it adds no behaviour and changes no output byte. The
+A thin adaptor over the delivery modules (this subpackage, and the schema in
+:mod:`dronefleet.config`, the tables in :mod:`dronefleet.records`, the summary in
+:mod:`dronefleet.cli`): it adds no behaviour and changes no output byte. The
 schema is :data:`dronefleet.config.PARAMETERS` (units in each doc), validation
 :func:`dronefleet.config.load_config`, the tables those of :mod:`dronefleet.records`.
 ``dronefleet run`` keeps its own delivery path for what only delivery has (fleet
@@ -10,8 +11,8 @@ files, the progress bar in weeks); it prints and writes exactly what this module
 
 import re
 
-from .config import PARAMETERS, AnyText, Interval, Options, default_config, load_config
-from .scenarios import Field
+from ..config import PARAMETERS, AnyText, Interval, Options, default_config, load_config
+from ..scenarios import Field
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "load", "read_config", "simulate",
            "format_summary", "describe", "label"]
@@ -28,7 +29,7 @@ def _allowed(constraint):
         return " | ".join(map(repr, constraint.values))
     if isinstance(constraint, AnyText):
         return "any text"
-    return "a registered winner rule"  # RegisteredRule: listed by dronefleet.auction.RULES
+    return "a registered winner rule"  # RegisteredRule: listed by dronefleet.delivery.auction.RULES
 
 
 def _field(p):
@@ -46,7 +47,7 @@ def load(path=None, overrides=(), seed=None):
 
 
 def read_config(path):
-    from .records import read_config as read
+    from ..records import read_config as read
 
     return read(path)
 
@@ -54,7 +55,7 @@ def read_config(path):
 def simulate(config):
     """One run of ``config`` (its fleet file, if any, loaded first) -> the tables of :mod:`dronefleet.records`."""
     from .fleet import load_fleet
-    from .records import tables
+    from ..records import tables
     from .simulation import simulate as run
 
     fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None
@@ -63,7 +64,7 @@ def simulate(config):
 
 def format_summary(tables):
     """The run's metrics as ``dronefleet run`` prints them, from its summary table."""
-    from .cli import format_summary as lines
+    from ..cli import format_summary as lines
 
     return lines(tables["summary"].to_pylist()[0])
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import ConfigError
+from ..config import ConfigError
 
 #: Columns a fleet file must have.
 COLUMNS = ("t_s", "uav", "soh", "w_distance", "w_mass", "w_soc", "intercept", "steps", "soc", "lost", "period")
@@ -98,7 +98,7 @@ def load_fleet(path, config):
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
 
-    from .records import read_config
+    from ..records import read_config
 
     path = seeded_path(path, config.seed)
     where = f"run.fleet_file {str(path)!r}"
@@ -198,7 +198,7 @@ def save_fleet(result, path):
     """
     import pyarrow.compute as pc
 
-    from .records import fleet_table, write_table
+    from ..records import fleet_table, write_table
 
     path = seeded_path(path, result.config.seed)
     table = fleet_table(result)

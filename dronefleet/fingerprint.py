@@ -50,7 +50,7 @@ def run_config(name):
 def fingerprints():
     """{run name: {table name: SHA-256}} of every run of :data:`RUNS` and of ``"warm_start"``."""
     from .delivery.fleet import save_fleet
-    from .records import tables
+    from .delivery.records import tables
     from .delivery.simulation import simulate
 
     out = {}

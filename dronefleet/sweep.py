@@ -296,7 +296,8 @@ def execute(run: Run, out: Path) -> str | None:
     and its error returned as one line; a run that succeeds removes any such record and
     returns None. Runs in worker processes, so it imports the engine here.
     """
-    from .records import tables, write_table
+    from .delivery.records import tables
+    from .records import write_table
     from .delivery.simulation import simulate
 
     try:
@@ -360,7 +361,7 @@ def state(run: Run, out: Path) -> str:
     changed since): new results would silently mix with old ones.
     """
     from .delivery.fleet import seeded_path
-    from .records import read_config
+    from .delivery.records import read_config
 
     summary = run.path(out, "summary")
     if summary.exists():

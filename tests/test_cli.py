@@ -6,7 +6,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from dronefleet import cli
-from dronefleet.records import TABLES, read_config
+from dronefleet.delivery.records import TABLES, read_config
 
 SHORT = ["--set", "horizon_weeks=0.05", "--set", "n_uavs=5"]
 

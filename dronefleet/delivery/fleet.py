@@ -98,7 +98,7 @@ def load_fleet(path, config):
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
 
-    from ..records import read_config
+    from .records import read_config
 
     path = seeded_path(path, config.seed)
     where = f"run.fleet_file {str(path)!r}"
@@ -198,7 +198,8 @@ def save_fleet(result, path):
     """
     import pyarrow.compute as pc
 
-    from ..records import fleet_table, write_table
+    from ..records import write_table
+    from .records import fleet_table
 
     path = seeded_path(path, result.config.seed)
     table = fleet_table(result)

@@ -1,12 +1,12 @@
 """The UAV delivery scenario behind the :mod:`dronefleet.scenarios` contract.
 
-A thin adaptor over the delivery modules (this subpackage, and the schema in
-:mod:`dronefleet.config`, the tables in :mod:`dronefleet.records`, the summary in
-:mod:`dronefleet.cli`): it adds no behaviour and changes no output byte. The
-schema is :data:`dronefleet.config.PARAMETERS` (units in each doc), validation
-:func:`dronefleet.config.load_config`, the tables those of :mod:`dronefleet.records`.
-``dronefleet run`` keeps its own delivery path for what only delivery has (fleet
-files, the progress bar in weeks); it prints and writes exactly what this module does.
+A thin adaptor over the delivery modules (this subpackage, the schema in
+:mod:`dronefleet.config`, the summary in :mod:`dronefleet.cli`): it adds no behaviour
+and changes no output byte. The schema is :data:`dronefleet.config.PARAMETERS` (units in
+each doc), validation :func:`dronefleet.config.load_config`, the tables those of
+:mod:`dronefleet.delivery.records`. ``dronefleet run`` keeps its own delivery path for
+what only delivery has (fleet files, the progress bar in weeks); it prints and writes
+exactly what this module does.
 """
 
 import re
@@ -18,7 +18,7 @@ __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "load", "read_conf
            "format_summary", "describe", "label"]
 
 NAME = "delivery"
-TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.records.TABLES
+TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
 FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
 
 
@@ -47,15 +47,16 @@ def load(path=None, overrides=(), seed=None):
 
 
 def read_config(path):
-    from ..records import read_config as read
+    from .records import read_config as read
 
     return read(path)
 
 
 def simulate(config):
-    """One run of ``config`` (its fleet file, if any, loaded first) -> the tables of :mod:`dronefleet.records`."""
+    """One run of ``config`` (its fleet file, if any, loaded first) -> its tables
+    (:mod:`dronefleet.delivery.records`)."""
     from .fleet import load_fleet
-    from ..records import tables
+    from .records import tables
     from .simulation import simulate as run
 
     fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None

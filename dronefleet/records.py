@@ -87,7 +87,7 @@ def clean_leftovers(out_dir):
         match = pattern.fullmatch(leftover.name)
         if match is None or _alive(int(match[1])):
             continue
-        if match[2] == "old" and run_dir_state(out_dir) in ("absent", "empty"):
+        if match[2] == "old" and run_dir_state(out_dir, ()) in ("absent", "empty"):  # whatever the tables
             os.replace(leftover, out_dir)
         else:
             shutil.rmtree(leftover, ignore_errors=True)

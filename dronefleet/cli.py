@@ -110,7 +110,8 @@ def check_outputs(out, save_fleet, overwrite, tables=None):
     names ``tables``, by default delivery's); its parent and ``save_fleet``'s folder must be
     writable; ``save_fleet`` must not exist unless ``overwrite``.
     """
-    from .records import TABLES, clean_leftovers, run_dir_state
+    from .delivery.records import TABLES
+    from .records import clean_leftovers, run_dir_state
 
     if out.name in ("", ".."):  # "." and "/" normalised have no name: no sibling to write first
         raise OutputError(f"--out {str(out)!r} must name a folder of its own, e.g. results/runs/mine")
@@ -147,10 +148,10 @@ def run(args):
     name = Path(args.config).stem if args.config else "paper"
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 
-    from .fleet import load_fleet, save_fleet, seeded_path
-    from .metrics import run_metrics
-    from .records import write_run
-    from .simulation import InvalidStateError, RunTooLargeError, simulate
+    from .delivery.fleet import load_fleet, save_fleet, seeded_path
+    from .delivery.metrics import run_metrics
+    from .delivery.records import write_run
+    from .delivery.simulation import InvalidStateError, RunTooLargeError, simulate
     from .supervisor import SupervisorError
 
     fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None  # refused before any work

@@ -136,7 +136,7 @@ class Options:
 
 
 class RegisteredRule:
-    """One of the winner rules registered in ``dronefleet.auction.RULES``.
+    """One of the winner rules registered in ``dronefleet.delivery.auction.RULES``.
 
     Imported lazily so that ``config`` imports nothing heavy (and no cycle).
     ``base`` restricts it to the rules that can resolve reservation's immediate bids.
@@ -146,7 +146,7 @@ class RegisteredRule:
         self.base = base
 
     def allowed(self) -> tuple[str, ...]:
-        from .auction import BASE_RULES, RULES
+        from .delivery.auction import BASE_RULES, RULES
 
         return BASE_RULES if self.base else tuple(RULES)
 
@@ -258,7 +258,7 @@ class Config:
                    "abort threshold xi [fraction of take-off SoC]")
     # [auction]
     rule: str = _p("auction", "least_confident", str, RegisteredRule(),
-                   "winner rule, a name registered in dronefleet.auction.RULES")
+                   "winner rule, a name registered in dronefleet.delivery.auction.RULES")
     base_rule: str = _p("auction", "least_confident", str, RegisteredRule(base=True),
                         "rule that resolves the immediate bids under 'reservation'")
     theta: float = _p("auction", 50.0, float, Interval(0, 100, "both"),

@@ -49,9 +49,9 @@ def run_config(name):
 
 def fingerprints():
     """{run name: {table name: SHA-256}} of every run of :data:`RUNS` and of ``"warm_start"``."""
-    from .fleet import save_fleet
-    from .records import tables
-    from .simulation import simulate
+    from .delivery.fleet import save_fleet
+    from .delivery.records import tables
+    from .delivery.simulation import simulate
 
     out = {}
     results = {}

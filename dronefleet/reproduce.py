@@ -41,7 +41,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from . import analysis
+from .delivery import analysis
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
@@ -233,7 +233,7 @@ def tidy_fig16(study):
 
 
 def draw_fig16(study, label="Figure 16", figure="fig16"):
-    from . import figures
+    from .delivery import figures
 
     d = study.root / figure
     outcomes, backlog = _read(study, figure, "outcomes"), _read(study, figure, "backlog")
@@ -255,7 +255,7 @@ def tidy_fig17(study):
 
 
 def draw_fig17(study):
-    from . import figures
+    from .delivery import figures
 
     accuracy = _read(study, "fig17", "accuracy")
     return [_draw(figures.accuracy_over_weeks, accuracy, study.root / "fig17" / "fig17.png",
@@ -271,7 +271,7 @@ def tidy_fig18(study):
 
 
 def draw_fig18(study):
-    from . import figures
+    from .delivery import figures
 
     grid = _read(study, "fig18", "winner_soh")
     return [_draw(figures.winner_soh_heatmaps, grid, study.root / "fig18" / "fig18.png",
@@ -297,7 +297,7 @@ def tidy_fig19(study):
 
 
 def draw_fig19(study):
-    from . import figures
+    from .delivery import figures
 
     table = _read(study, "fig19", "thresholds")
     d = study.root / "fig19"
@@ -316,7 +316,7 @@ def tidy_fig20(study):
 
 
 def draw_fig20(study):
-    from . import figures
+    from .delivery import figures
 
     pending = _read(study, "fig20", "pending")
     weeks = int(pending.arrival_week.max())
@@ -336,7 +336,7 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
     With ``redraw``, only draw, from the tidy parquet tables already written. Returns the
     paths of the figure files, by figure.
     """
-    from .figures import require_matplotlib
+    from .figstyle import require_matplotlib
 
     try:
         require_matplotlib()  # refuse before hours of runs, not after
@@ -371,7 +371,7 @@ def check(figure, results="results", quick=False, log=print):
     seeds 0-1 only) are skipped. Returns the differences, one line each: empty if every
     value of every re-run summary equals the table's.
     """
-    from .fleet import seeded_path
+    from .delivery.fleet import seeded_path
 
     study = Study(results, quick, jobs=1, log=log)
     if figure in REPLENISHMENT_FIGURES:

@@ -33,9 +33,8 @@ The contract: a scenario is a module defining
 
 Where each scenario's pieces are:
 
-* ``delivery``: :mod:`dronefleet.delivery_scenario`, an adaptor over the top-level modules
-  (config, simulation, engine, records, metrics, fleet, figures, reproduce), which stay where
-  they are until delivery gets its own subpackage.
+* ``delivery``: :mod:`dronefleet.delivery.scenario` over the subpackage (simulation,
+  engine, metrics, fleet, analysis, figures), with its schema in :mod:`dronefleet.config`.
 * ``replenishment``: :mod:`dronefleet.replenishment.scenario` over the subpackage
   (params, simulate, kernel, bounds).
 
@@ -115,9 +114,9 @@ class Scenario:
 
 
 def _delivery() -> ModuleType:
-    from . import delivery_scenario
+    from .delivery import scenario
 
-    return delivery_scenario
+    return scenario
 
 
 def _replenishment() -> ModuleType:

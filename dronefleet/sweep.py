@@ -310,8 +310,9 @@ def execute(run: Run, out: Path) -> str | None:
     and its error returned as one line; a run that succeeds removes any such record and
     returns None. Runs in worker processes, so it imports the engine here.
     """
-    from .records import tables, write_table
-    from .simulation import simulate
+    from .delivery.records import tables
+    from .records import write_table
+    from .delivery.simulation import simulate
 
     try:
         # Files of an interrupted attempt are replaced, not deleted first: two processes that
@@ -373,8 +374,8 @@ def state(run: Run, out: Path) -> str:
     Raises SweepError if the run's summary was made with another config (the sweep file
     changed since): new results would silently mix with old ones.
     """
-    from .fleet import seeded_path
-    from .records import read_config
+    from .delivery.fleet import seeded_path
+    from .delivery.records import read_config
 
     summary = run.path(out, "summary")
     if summary.exists():

@@ -9,8 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from dronefleet import auction, config as cfg, simulation
-from dronefleet.orders import Orders
+from dronefleet import config as cfg
+from dronefleet.delivery import auction, simulation
+from dronefleet.delivery.orders import Orders
 
 WEEK = 7 * 24 * 3600.0
 DELTA = 2.0  # advertising period of MODEL.md section 4

@@ -12,9 +12,10 @@ import pandas as pd
 import pytest
 
 from conftest import WEEK
-from dronefleet import analysis, auction, config as cfg
-from dronefleet.metrics import by_arrival_week
-from dronefleet.policy import decision
+from dronefleet import config as cfg
+from dronefleet.delivery import analysis, auction
+from dronefleet.delivery.metrics import by_arrival_week
+from dronefleet.delivery.policy import decision
 
 C = cfg.default_config()
 

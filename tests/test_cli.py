@@ -6,7 +6,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from dronefleet import cli
-from dronefleet.records import TABLES, read_config
+from dronefleet.delivery.records import TABLES, read_config
 
 SHORT = ["--set", "horizon_weeks=0.05", "--set", "n_uavs=5"]
 
@@ -68,7 +68,8 @@ def test_progress_bar_draws_weeks_only_on_a_terminal():
 
 @pytest.mark.parametrize("error", ["SupervisorError", "InvalidStateError"])
 def test_a_run_the_engine_stops_ends_in_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch, error):
-    from dronefleet import simulation, supervisor
+    from dronefleet import supervisor
+    from dronefleet.delivery import simulation
     cls = {"SupervisorError": supervisor.SupervisorError, "InvalidStateError": simulation.InvalidStateError}[error]
 
     def stopped(*args, **kwargs):
@@ -106,7 +107,7 @@ def test_a_config_that_is_a_pipe_is_refused_not_waited_on(tmp_path, capsys):
 
 
 def test_out_as_a_symlink_and_a_fleet_inside_out_are_refused_before_any_work(tmp_path, capsys, monkeypatch):
-    from dronefleet import simulation
+    from dronefleet.delivery import simulation
     monkeypatch.setattr(simulation, "simulate", lambda *a, **k: pytest.fail("simulated"))
     (tmp_path / "loop").symlink_to(tmp_path / "loop")
     _refused(capsys, ["run", *SHORT, "--out", str(tmp_path / "loop")], "is a symbolic link")
@@ -126,13 +127,13 @@ def test_a_degenerate_run_stops_at_the_attempt_limit_in_one_line(tmp_path, capsy
 
 
 def simulation_module():
-    from dronefleet import simulation
+    from dronefleet.delivery import simulation
     return simulation
 
 
 def test_a_failed_run_write_removes_the_fleet_file_written_before_it(tmp_path, capsys, monkeypatch):
     import errno
-    from dronefleet import records
+    from dronefleet.delivery import records
 
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
@@ -155,7 +156,7 @@ def test_a_closed_stdout_ends_quietly(tmp_path):
 
 
 def test_ctrl_c_ends_in_one_line_with_the_outputs_absent(tmp_path, capsys, monkeypatch):
-    from dronefleet import simulation
+    from dronefleet.delivery import simulation
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt

@@ -188,7 +188,7 @@ def test_replace_unknown_name():
 
 
 def test_unknown_rule_lists_registered_rules():
-    from dronefleet.auction import RULES
+    from dronefleet.delivery.auction import RULES
 
     with pytest.raises(ConfigError) as e:
         load_config(overrides=["rule=least_confidnt"])

@@ -7,7 +7,7 @@ import pytest
 
 from conftest import K, power, rate
 from dronefleet import config as cfg
-from dronefleet.energy import (
+from dronefleet.delivery.energy import (
     LOSS_TOLERANCE,
     capable,
     charge_rate,

@@ -19,7 +19,8 @@ from conftest import (
     ALWAYS, DELTA, K, MU, NEVER, SHORT_ONLY, SIGMA, SPEED, WEEK, charged, next_grid, rate, run_state,
     scenario, scenario_config, x_std,
 )
-from dronefleet import config as cfg, engine, records, simulation
+from dronefleet import config as cfg
+from dronefleet.delivery import engine, simulation, records as delivery_records
 from dronefleet.supervisor import BUILTIN_CONTROLLER, SupervisorError
 
 # Local supervisor state of a UAV by engine mode once every event at an instant is processed.
@@ -344,7 +345,7 @@ def test_loss_with_xi_zero():
     assert st.fleet.mode.tolist() == [engine.IDLE, engine.LOST]
     assert r.orders["attempts"].tolist() == [2, 1, 1]
     assert not np.isnan(r.orders["delivered_s"]).any()
-    t = records.tables(r)
+    t = delivery_records.tables(r)
     assert t["summary"].column("lost_uavs")[0].as_py() == 1
     assert t["attempts"].column("outcome").to_pylist()[0] == "lost"
     fleet = t["fleet"].to_pylist()
@@ -571,8 +572,8 @@ SKIP_CASES = [("least_confident", 25, 0), ("least_confident", 5, 1), ("most_conf
 def test_tick_skip_is_exact(rule, n_uavs, seed, every_tick_rules):
     base = cfg.replace(cfg.default_config(), horizon_weeks=1.0, tau_minutes=15.0, n_uavs=n_uavs, seed=seed,
                        theta=80.0, rule=rule)
-    skipped = records.tables(simulation.simulate(base))
-    every = records.tables(simulation.simulate(cfg.replace(base, rule=every_tick_rules[rule])))
+    skipped = delivery_records.tables(simulation.simulate(base))
+    every = delivery_records.tables(simulation.simulate(cfg.replace(base, rule=every_tick_rules[rule])))
     for name in ("orders", "attempts", "fleet", "timeseries"):
         assert skipped[name].equals(every[name]), name
     ms, me = skipped["summary"].to_pylist()[0], every["summary"].to_pylist()[0]
@@ -586,11 +587,11 @@ def test_tick_skip_is_exact(rule, n_uavs, seed, every_tick_rules):
 
 def test_same_seed_gives_byte_identical_files(tmp_path):
     c = cfg.replace(cfg.default_config(), horizon_weeks=1.0, seed=7)
-    paths1 = records.write_run(simulation.simulate(c), tmp_path / "a")
-    paths2 = records.write_run(simulation.simulate(c), tmp_path / "b")
-    paths3 = records.write_run(simulation.simulate(cfg.replace(c, seed=8)), tmp_path / "c")
-    assert set(paths1) == set(records.TABLES)
-    for name in records.TABLES:
+    paths1 = delivery_records.write_run(simulation.simulate(c), tmp_path / "a")
+    paths2 = delivery_records.write_run(simulation.simulate(c), tmp_path / "b")
+    paths3 = delivery_records.write_run(simulation.simulate(cfg.replace(c, seed=8)), tmp_path / "c")
+    assert set(paths1) == set(delivery_records.TABLES)
+    for name in delivery_records.TABLES:
         assert paths1[name].read_bytes() == paths2[name].read_bytes(), name
     for name in ("orders", "attempts", "fleet", "timeseries"):
         assert paths1[name].read_bytes() != paths3[name].read_bytes(), name
@@ -636,7 +637,7 @@ def test_a_run_is_a_prefix_of_a_longer_run(phase):
     np.testing.assert_array_equal(sa["lost"], la["lost"][:m] & back)
     assert not back[j] and turned[j] == (phase == "returning")
     # Fleet at the end of weeks 1-3, time series up to the split.
-    ts, tl = records.tables(short), records.tables(long)
+    ts, tl = delivery_records.tables(short), delivery_records.tables(long)
     weeks = [pa.compute.less_equal(t["fleet"]["week"], 3) for t in (ts, tl)]
     fleet_short, fleet_long = ts["fleet"].filter(weeks[0]), tl["fleet"].filter(weeks[1])
     assert fleet_short.num_rows == 3 * 25

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from dronefleet import engine, simulation
+from dronefleet.delivery import engine, simulation
 
 from conftest import scenario, scenario_config
 

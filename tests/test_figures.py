@@ -8,7 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dronefleet import figures
+from dronefleet import figstyle
+from dronefleet.delivery import figures
 
 matplotlib = pytest.importorskip("matplotlib")
 
@@ -61,12 +62,12 @@ DRAWINGS = {
 @pytest.mark.parametrize("name", DRAWINGS)
 def test_a_table_gives_a_png_of_the_same_bytes_every_time_and_the_data_shows(name, tmp_path, monkeypatch):
     draw, table, column = DRAWINGS[name]
-    import dronefleet.simulation
+    import dronefleet.delivery.simulation
 
     def no_simulation(*args, **kwargs):
         raise AssertionError("a figure must not simulate")
 
-    monkeypatch.setattr(dronefleet.simulation, "simulate", no_simulation)
+    monkeypatch.setattr(dronefleet.delivery.simulation, "simulate", no_simulation)
     paths = [draw(table(), tmp_path / "first.png", f"Figure: {name}"),
              draw(table(), tmp_path / "second.png", f"Figure: {name}")]
     first, second = (path.read_bytes() for path in paths)
@@ -87,14 +88,17 @@ def test_the_users_matplotlib_style_changes_nothing(tmp_path):
 
 
 def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp_path):
-    # Imports only the standard library, numpy, pandas and (lazily) matplotlib: none of them imports
-    # dronefleet, so drawing cannot load the engine.
-    tree = ast.parse(Path(figures.__file__).read_text())
-    modules = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
-               for alias in node.names}
-    modules |= {node.module.split(".")[0] if node.level == 0 else "." for node in ast.walk(tree)
-                if isinstance(node, ast.ImportFrom)}
-    assert modules == {"contextlib", "pathlib", "numpy", "pandas", "matplotlib"}
+    # Imports only the standard library, numpy, pandas, (lazily) matplotlib and the shared style,
+    # which imports nothing of dronefleet either: drawing cannot load the engine.
+    def imported(module):
+        tree = ast.parse(Path(module.__file__).read_text())
+        names = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
+                 for alias in node.names}
+        return names | {node.module.split(".")[0] if node.level == 0 else "." * node.level + node.module
+                        for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+
+    assert imported(figures) == {"pathlib", "numpy", "pandas", "..figstyle"}
+    assert imported(figstyle) == {"contextlib", "matplotlib"}
     figures.accuracy_over_weeks(accuracy(), tmp_path / "fig.png", "Figure")
     # matplotlib itself may import pyplot (to resolve its default backend), but no figure is left there.
     if "matplotlib.pyplot" in sys.modules:

@@ -102,7 +102,7 @@ def fingerprints():
 
 
 def test_fingerprints_cover_every_winner_rule():
-    from dronefleet.auction import RULES
+    from dronefleet.delivery.auction import RULES
 
     assert set(fingerprint.RUNS) == set(RULES)
     assert set(EXPECTED) == set(fingerprint.RUNS) | {"warm_start"}

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from dronefleet import cli, executors, simulation, sweep as sw
+from dronefleet import cli, executors, sweep as sw
+from dronefleet.delivery import simulation
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOKE = ROOT / "configs" / "sweeps" / "smoke.toml"   # 8 runs, 3 tasks of up to 3 runs

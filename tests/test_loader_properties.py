@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from dronefleet.config import (PARAMETERS, SECTIONS, Config, ConfigError, config_from_dict, default_config,
                                load_config, replace)
-from dronefleet.fleet import COLUMNS, SavedFleet, load_fleet
+from dronefleet.delivery.fleet import COLUMNS, SavedFleet, load_fleet
 from dronefleet.records import write_table
 from dronefleet.supervisor import BUILTIN_CONTROLLER, Automaton, SupervisorFileError, load_supervisor
 

@@ -7,7 +7,7 @@ import pytest
 
 from conftest import WEEK, rate
 from dronefleet import config as cfg
-from dronefleet.metrics import accuracy_points, by_arrival_week, decision_accuracy
+from dronefleet.delivery.metrics import accuracy_points, by_arrival_week, decision_accuracy
 
 C = cfg.default_config()
 

@@ -5,7 +5,7 @@ import pytest
 from numpy.testing import assert_allclose
 from sklearn.linear_model import SGDClassifier
 
-from dronefleet.policy import (
+from dronefleet.delivery.policy import (
     decision,
     initial_fit,
     optimal_init,

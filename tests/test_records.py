@@ -1,4 +1,4 @@
-"""A run's tables, metrics and parquet files (MODEL.md sections 10 and 11; records.py)."""
+"""A run's tables, metrics and parquet files (MODEL.md sections 10 and 11; delivery/records.py, records.py)."""
 
 import json
 import math
@@ -8,8 +8,9 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import ALWAYS, NEVER, WEEK, rate, run_state, scenario, scenario_config
-from dronefleet.metrics import run_metrics
-from dronefleet import config as cfg, records, simulation
+from dronefleet.delivery.metrics import run_metrics
+from dronefleet import config as cfg, records
+from dronefleet.delivery import simulation, records as delivery_records
 
 SCHEMAS = {
     "orders": {"order_id": pa.int32(), "arrival_s": pa.float64(), "arrival_week": pa.int16(),
@@ -44,8 +45,8 @@ def small_run():
 
 
 def test_table_schemas(small_run, tmp_path):
-    paths = records.write_run(small_run, tmp_path)
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"{n}.parquet" for n in records.TABLES)
+    paths = delivery_records.write_run(small_run, tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"{n}.parquet" for n in delivery_records.TABLES)
     for name, columns in SCHEMAS.items():
         schema = pq.read_schema(paths[name])
         assert schema.names == list(columns), name
@@ -90,18 +91,18 @@ def test_table_schemas(small_run, tmp_path):
 
 
 def test_config_is_embedded_in_every_file(small_run, tmp_path):
-    paths = records.write_run(small_run, tmp_path)
+    paths = delivery_records.write_run(small_run, tmp_path)
     for name, path in paths.items():
-        assert records.read_config(path) == small_run.config, name
+        assert delivery_records.read_config(path) == small_run.config, name
         meta = pq.read_schema(path).metadata
         assert json.loads(meta[b"dronefleet.config"]) == small_run.config.to_dict()
     # Another config is read back as itself, not as the default.
     c = cfg.replace(cfg.default_config(), seed=99, rule="threshold", theta=70.0, tau_minutes=25.0,
                     scaler_mean=(1.0, 2.0, 3.0), horizon_weeks=0.05)
     result = simulation.simulate(c)
-    path = records.write_table(records.tables(result)["timeseries"], tmp_path / "ts.parquet", c)
-    assert records.read_config(path) == c
-    assert records.read_config(path) != cfg.default_config()
+    path = records.write_table(delivery_records.tables(result)["timeseries"], tmp_path / "ts.parquet", c)
+    assert delivery_records.read_config(path) == c
+    assert delivery_records.read_config(path) != cfg.default_config()
 
 
 # ---------------------------------------------------------------------------- metrics by hand
@@ -138,7 +139,7 @@ def test_metrics_on_a_tiny_scenario():
     assert m["auctions"] == 3
     assert m["reservations_won"] == 0
     assert math.isnan(m["median_reservation_wait_s"]) and math.isnan(m["forecast_met_pct"])
-    t = records.tables(r)
+    t = delivery_records.tables(r)
     orders = t["orders"].to_pydict()
     assert orders["delivered_s"][:2] == pytest.approx([100.0, 800.0], rel=1e-12)
     assert orders["delivered_s"][2:] == [None, None]
@@ -180,7 +181,7 @@ def test_backlog_and_pending_by_arrival_week():
     assert m["delivered"] == 0 and m["pending"] == 4 and m["attempts"] == 0
     assert math.isnan(m["median_delivery_time_s"]) and math.isnan(m["aborted_pct"])
     assert m["backlog_age_s"] == pytest.approx(sum(T - a for a in arrivals), rel=1e-12)
-    orders = records.tables(r)["orders"].to_pydict()
+    orders = delivery_records.tables(r)["orders"].to_pydict()
     assert orders["arrival_week"] == [1, 1, 2, 2]
     by_week = {}
     for a, w in zip(orders["arrival_s"], orders["arrival_week"]):
@@ -214,7 +215,7 @@ def _failing_writer(calls_before_failure=0):
 
 
 def test_failed_write_leaves_no_file(small_run, tmp_path, monkeypatch):
-    table = records.tables(small_run)["attempts"]
+    table = delivery_records.tables(small_run)["attempts"]
     write, calls = _failing_writer()
     monkeypatch.setattr(pq, "write_table", write)
     target = tmp_path / "attempts.parquet"
@@ -226,7 +227,7 @@ def test_failed_write_leaves_no_file(small_run, tmp_path, monkeypatch):
 
 
 def test_failed_write_keeps_the_previous_file(small_run, tmp_path, monkeypatch):
-    tables = records.tables(small_run)
+    tables = delivery_records.tables(small_run)
     target = tmp_path / "orders.parquet"
     records.write_table(tables["orders"], target, small_run.config)
     before = target.read_bytes()
@@ -245,6 +246,6 @@ def test_interrupted_run_leaves_no_run_folder(small_run, tmp_path, monkeypatch):
     write, calls = _failing_writer(calls_before_failure=2)
     monkeypatch.setattr(pq, "write_table", write)
     with pytest.raises(_Boom):
-        records.write_run(small_run, tmp_path / "run")
+        delivery_records.write_run(small_run, tmp_path / "run")
     assert len(calls) == 3
     assert list(tmp_path.iterdir()) == []  # neither the run folder nor its hidden temporary

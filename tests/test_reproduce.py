@@ -7,8 +7,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from dronefleet import analysis, cli, records, reproduce, simulation, sweep
-from dronefleet.fleet import seeded_path
+from dronefleet import cli, reproduce, sweep
+from dronefleet.delivery import analysis, simulation, records as delivery_records
+from dronefleet.delivery.fleet import seeded_path
 
 pytest.importorskip("matplotlib")
 
@@ -69,7 +70,7 @@ def test_figure_20_starts_from_the_rules_sweeps_learned_fleets(quick):
     rules, reservations = study.sweep("rules"), study.sweep("reservations")
     for run in reservations.runs:
         path = run.path(study.out("reservations"), "summary")
-        config = records.read_config(path)
+        config = delivery_records.read_config(path)
         learned = next(r for r in rules.runs if r.config.rule == "least_confident"
                        and r.config.tau_minutes == 15.0 and r.config.seed == run.config.seed)
         assert seeded_path(config.fleet_file, config.seed) == learned.path(study.out("rules"), "fleet")
@@ -134,7 +135,7 @@ def test_quick_sweeps_are_the_study_sweeps_with_fewer_seeds_and_weeks(tmp_path):
 
 
 def test_without_matplotlib_nothing_runs(tmp_path, monkeypatch, capsys):
-    from dronefleet import figures
+    from dronefleet import figstyle
 
     def missing():
         raise ImportError("drawing figures needs matplotlib: pip install 'dronefleet[plots]'")
@@ -142,7 +143,7 @@ def test_without_matplotlib_nothing_runs(tmp_path, monkeypatch, capsys):
     def forbidden(*args, **kwargs):
         raise AssertionError("no run may start without matplotlib")
 
-    monkeypatch.setattr(figures, "require_matplotlib", missing)  # looked up at each call
+    monkeypatch.setattr(figstyle, "require_matplotlib", missing)  # looked up at each call
     monkeypatch.setattr(reproduce, "run_sweep", forbidden)
     assert cli.main(["reproduce", "fig16", "--quick", "--results", str(tmp_path)]) == 2
     assert "pip install 'dronefleet[plots]'" in capsys.readouterr().err

@@ -11,10 +11,11 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import K, MU, SIGMA, WEEK, run_state, scenario, scenario_config, x_std
-from dronefleet import cli, config as cfg, engine, fleet as fleetfile, records, simulation
-from dronefleet.metrics import run_metrics
-from dronefleet.orders import generate_orders
-from dronefleet.policy import optimal_init, sgd_step
+from dronefleet import cli, config as cfg
+from dronefleet.delivery import engine, fleet as fleetfile, simulation, records as delivery_records
+from dronefleet.delivery.metrics import run_metrics
+from dronefleet.delivery.orders import generate_orders
+from dronefleet.delivery.policy import optimal_init, sgd_step
 
 STATE_RESERVED = 3  # the supervisor's state after wonBid (S0 -capableTask-> 1 -bid-> 2 -wonBid-> 3)
 
@@ -173,7 +174,7 @@ def test_an_aborted_reserved_order_is_advertised_again_once_its_parcel_is_back()
     # Advertised once at t = 0, then at every tick from the landing on.
     assert r.auctions == 1 + (c.horizon_s / 2.0 - math.ceil(a["return_s"][0] / 2.0) + 1)
     assert st.counters[engine.QUEUE_LEN] == 1 and st.book.queue[0] == 0
-    t = records.tables(r)["attempts"].to_pydict()
+    t = delivery_records.tables(r)["attempts"].to_pydict()
     assert t["reserved"] == [True] and t["forecast_met"] == [False]
     m = run_metrics(r)
     assert (m["reservations_won"], m["forecast_met_pct"]) == (1, 0.0)
@@ -216,12 +217,12 @@ def test_save_then_load_gives_identical_policies_soh_and_soc(saved_fleet):
     assert loaded.soh.tobytes() == final["soh"].tobytes()
     assert loaded.soc.tobytes() == final["soc"].tobytes()
     assert loaded.lost.tolist() == final["lost"].tolist() and loaded.period == 1
-    assert records.read_config(saved_fleet.path) == saved_fleet.config
+    assert delivery_records.read_config(saved_fleet.path) == saved_fleet.config
     assert pq.read_table(saved_fleet.path).num_rows == 10
 
 
 def test_a_run_fleet_table_is_a_fleet_file_too(saved_fleet, tmp_path):
-    paths = records.write_run(saved_fleet, tmp_path)
+    paths = delivery_records.write_run(saved_fleet, tmp_path)
     from_table = fleetfile.load_fleet(paths["fleet"], saved_fleet.config)
     saved = fleetfile.load_fleet(saved_fleet.path, saved_fleet.config)
     for field in ("soh", "coef", "intercept", "steps", "soc", "lost"):
@@ -249,7 +250,7 @@ def test_a_warm_start_starts_from_the_fleet_with_an_empty_queue_and_fresh_orders
 def test_a_warm_start_without_reservations_is_a_plain_run_from_that_fleet(saved_fleet):
     # The same fleet put in place by hand in a new run of period 2 gives the same tables.
     c = cfg.replace(saved_fleet.config, fleet_file=str(saved_fleet.path))
-    warm = records.tables(simulation.simulate(c))
+    warm = delivery_records.tables(simulation.simulate(c))
     final = saved_fleet.snapshots[-1]
     plain = saved_fleet.config
     rngs = np.random.SeedSequence(c.seed, spawn_key=(simulation.PERIOD_STREAMS, 2)).spawn(4)
@@ -265,7 +266,7 @@ def test_a_warm_start_without_reservations_is_a_plain_run_from_that_fleet(saved_
     for t in simulation.stops(plain.horizon_s):
         simulation.advance(st, t)
         snapshots.append(simulation.snapshot(st, t))
-    by_hand = records.tables(simulation.collect(st, snapshots, plain))
+    by_hand = delivery_records.tables(simulation.collect(st, snapshots, plain))
     for name in ("orders", "attempts", "fleet", "timeseries"):
         assert warm[name].equals(by_hand[name]), name
     assert str(warm["summary"].to_pylist()) == str(by_hand["summary"].to_pylist())  # nan-safe
@@ -282,7 +283,7 @@ def test_a_fleet_saved_under_another_size_or_scaling_is_refused(saved_fleet, key
 def test_a_missing_or_foreign_fleet_file_is_refused(saved_fleet, tmp_path):
     with pytest.raises(fleetfile.FleetFileError, match="no such file"):
         fleetfile.load_fleet(tmp_path / "nope.parquet", saved_fleet.config)
-    paths = records.write_run(saved_fleet, tmp_path)
+    paths = delivery_records.write_run(saved_fleet, tmp_path)
     with pytest.raises(fleetfile.FleetFileError, match="lacks the fleet column"):
         fleetfile.load_fleet(paths["orders"], saved_fleet.config)
 
@@ -304,7 +305,7 @@ def test_cli_saves_and_starts_from_a_fleet_with_the_seed_in_its_name(tmp_path, c
                      "--set", "rule=reservation"]) == 0
     summary = pq.read_table(tmp_path / "b" / "summary.parquet").to_pylist()[0]
     assert (summary["period"], summary["rule"]) == (2, "reservation")
-    assert records.read_config(tmp_path / "b" / "summary.parquet").fleet_file == pattern
+    assert delivery_records.read_config(tmp_path / "b" / "summary.parquet").fleet_file == pattern
     capsys.readouterr()
     assert cli.main(["run", "--set", "n_uavs=6", "--seed", "3", "--fleet", pattern]) == 2
     assert "saved with n_uavs = 5, but this run has n_uavs = 6" in capsys.readouterr().err
@@ -404,9 +405,9 @@ def test_whole_warm_run_reservations_obey_the_rules(saved_fleet):
 
 def test_reservation_runs_are_deterministic_and_the_tick_skip_is_exact(saved_fleet, every_tick_rules):
     c = cfg.replace(saved_fleet.config, rule="reservation", fleet_file=str(saved_fleet.path), horizon_weeks=1.0)
-    skipped = records.tables(simulation.simulate(c))
-    again = records.tables(simulation.simulate(c))
-    every = records.tables(simulation.simulate(cfg.replace(c, rule=every_tick_rules["reservation"])))
+    skipped = delivery_records.tables(simulation.simulate(c))
+    again = delivery_records.tables(simulation.simulate(c))
+    every = delivery_records.tables(simulation.simulate(cfg.replace(c, rule=every_tick_rules["reservation"])))
     for name in ("orders", "attempts", "fleet", "timeseries"):
         assert skipped[name].equals(again[name]) and skipped[name].equals(every[name]), name
     assert skipped["attempts"].num_rows > 20

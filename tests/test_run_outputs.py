@@ -24,7 +24,8 @@ import pyarrow.parquet as pq
 import pytest
 
 import dronefleet
-from dronefleet import cli, provenance, records, reproduce, simulation
+from dronefleet import cli, provenance, records, reproduce
+from dronefleet.delivery import simulation, records as delivery_records
 from dronefleet.config import default_config, load_config, replace
 
 SHORT = ["--set", "horizon_weeks=0.05", "--set", "n_uavs=5"]
@@ -235,9 +236,9 @@ def test_overwrite_replaces_a_run_and_leaves_nothing_beside_it(old_run, tmp_path
     code, _, _ = _run([*SHORT, "--seed", "2", "--out", str(out), "--overwrite",
                        "--save-fleet", str(tmp_path / "fleet.parquet")], capsys)
     assert code == 0
-    assert _seed_of(out) == 2 and records.read_config(tmp_path / "fleet.parquet").seed == 2
+    assert _seed_of(out) == 2 and delivery_records.read_config(tmp_path / "fleet.parquet").seed == 2
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fleet.parquet", "run"]
-    assert records.run_dir_state(out) == "complete"
+    assert records.run_dir_state(out, delivery_records.TABLES) == "complete"
 
 
 # Run in a subprocess: dies by SIGKILL at a chosen point of writing the run folder.
@@ -283,7 +284,7 @@ def test_a_run_killed_while_writing_leaves_a_complete_run(old_run, tmp_path, cap
     code, _, err = _run([*SHORT, "--seed", "3", "--out", str(out)], capsys)
     _assert_refused(code, err, "holds a complete run; pass --overwrite")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
-    assert records.run_dir_state(out) == "complete" and _seed_of(out) == survivor
+    assert records.run_dir_state(out, delivery_records.TABLES) == "complete" and _seed_of(out) == survivor
     if survivor == 1:
         assert _tree(out) == old
 
@@ -309,7 +310,7 @@ def test_run_with_set_does_not_write_over_the_plain_run(tmp_path, capsys, monkey
     assert _run([*SHORT, "--set", "tau_minutes=20"], capsys)[0] == 0
     folders = sorted((tmp_path / "results" / "runs").iterdir())
     assert len(folders) == 2
-    assert {records.read_config(f / "summary.parquet").tau_minutes for f in folders} == {15.0, 20.0}
+    assert {delivery_records.read_config(f / "summary.parquet").tau_minutes for f in folders} == {15.0, 20.0}
     code, _, err = _run(SHORT, capsys)  # the same config again: refused, not overwritten
     _assert_refused(code, err, "holds a complete run")
 
@@ -334,12 +335,12 @@ def test_every_file_of_a_run_and_a_saved_fleet_records_its_provenance(tmp_path, 
     assert _run([*SHORT, "--out", str(tmp_path / "run"), "--save-fleet", str(tmp_path / "fleet.parquet")],
                 capsys)[0] == 0
     files = [*(tmp_path / "run").iterdir(), tmp_path / "fleet.parquet"]
-    assert len(files) == len(records.TABLES) + 1
+    assert len(files) == len(delivery_records.TABLES) + 1
     for path in files:
         meta = pq.read_schema(path).metadata
         assert json.loads(meta[provenance.KEY]) == expected, path.name
         assert meta[provenance.VERSION_KEY] == dronefleet.__version__.encode()
-        assert records.read_config(path).n_uavs == 5  # the config is still there
+        assert delivery_records.read_config(path).n_uavs == 5  # the config is still there
 
 
 def test_provenance_leaves_the_data_and_other_metadata_alone(tmp_path):

@@ -21,9 +21,10 @@ import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 import pytest
 
-from dronefleet import cli, simulation, sweep as sw
+from dronefleet import cli, sweep as sw
+from dronefleet.delivery import simulation
 from dronefleet.config import default_config, replace
-from dronefleet.records import TABLES
+from dronefleet.delivery.records import TABLES
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 SMOKE = CONFIGS / "sweeps" / "smoke.toml"
@@ -273,7 +274,7 @@ def test_files_are_the_runs_tables_without_the_partition_columns(smoke):
     s, out = smoke
     run = s.runs[5]
     expected = simulation.simulate(run.config)
-    from dronefleet.records import read_config, tables
+    from dronefleet.delivery.records import read_config, tables
 
     for table, data in tables(expected).items():
         path = run.path(out, table)

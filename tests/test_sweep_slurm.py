@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 
 from dronefleet import cli
-from dronefleet.records import TABLES
+from dronefleet.delivery.records import TABLES
 
 SMOKE = Path(__file__).resolve().parents[1] / "configs" / "sweeps" / "smoke.toml"
 CLUSTER = Path(__file__).resolve().parent / "slurm" / "cluster.sh"

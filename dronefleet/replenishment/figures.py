@@ -2,7 +2,7 @@
 
 Each function reads the tables :mod:`dronefleet.replenishment.experiments` writes (one
 row per trial; one row of bounds per configuration) and draws one PNG with the style of
-:mod:`dronefleet.figures` (matplotlib's default style, Agg canvas, no "Software" entry:
+:mod:`dronefleet.figstyle` (matplotlib's default style, Agg canvas, no "Software" entry:
 the same tables give the same bytes). Nothing here imports the simulator.
 
 Colours: the fixed strategy C0, the mobile chargers C1, in every figure.
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..figures import _dodge, _figure
+from ..figstyle import _dodge, _figure
 
 COLOURS = {"fixed": "C0", "mobile": "C1"}
 LABELS = {"fixed": "fixed chargers", "mobile": "mobile chargers"}

@@ -1,67 +1,30 @@
 """The study's figures (EXPERIMENTS.md, Figures 16-20) as PNG files, from tidy tables alone.
 
-Each function takes a table of :mod:`dronefleet.analysis` (as stored in parquet under
+Each function takes a table of :mod:`dronefleet.delivery.analysis` (as stored in parquet under
 ``results/<figure>/``), draws one figure and writes it to ``path``. Nothing here imports
 the simulator, so a figure can be redrawn without re-simulating.
 
-matplotlib is an optional dependency (``pip install 'dronefleet[plots]'``), imported
-only when a figure is drawn. Figures are ``matplotlib.figure.Figure`` objects on the Agg
-canvas, never pyplot, so nothing stays registered in pyplot's global state; they are
-drawn under matplotlib's default style whatever the user's matplotlibrc, and saved
-without the "Software" entry, so the same table gives the same bytes.
+Drawn in the shared style of :mod:`dronefleet.figstyle` (matplotlib only when a figure is
+drawn, never pyplot, the same table gives the same bytes).
 
 Colours: one per rule (``rule`` column), in sorted order of the rules in the table, so
 a rule keeps its colour across the panels of a figure.
 """
 
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-DPI = 150
+from ..figstyle import _dodge, _figure
+
 SECONDS_PER_MINUTE = 60.0
 SECONDS_PER_DAY = 86_400.0
-
-
-def require_matplotlib():
-    """The matplotlib package with the submodules used here, or an error that says how to install it."""
-    try:
-        import matplotlib
-        import matplotlib.backends.backend_agg
-        import matplotlib.cbook
-        import matplotlib.figure
-        import matplotlib.patches
-        import matplotlib.style
-        import matplotlib.ticker
-    except ImportError as error:
-        raise ImportError("drawing figures needs matplotlib: pip install 'dronefleet[plots]'") from error
-    return matplotlib
-
-
-@contextmanager
-def _figure(path, title, figsize, **subplots):
-    """A new figure and its axes (``Figure.subplots(**subplots)``), saved to ``path`` on exit."""
-    mpl = require_matplotlib()
-    # The default style also while saving: rcParams are read when artists are drawn.
-    with mpl.style.context("default"):
-        fig = mpl.figure.Figure(figsize=figsize, layout="constrained")
-        mpl.backends.backend_agg.FigureCanvasAgg(fig)
-        axes = fig.subplots(**subplots)
-        yield mpl, fig, axes
-        fig.suptitle(title)
-        fig.savefig(path, dpi=DPI, format="png", metadata={"Software": None})
 
 
 def _colours(rules):
     """Colour of each rule: tab10 in sorted order of the rule names."""
     return {rule: f"C{i % 10}" for i, rule in enumerate(sorted(set(rules)))}
-
-
-def _dodge(k, n, width):
-    """Offset of the k-th of n side-by-side items of ``width``, so that together they centre on 0."""
-    return (k - (n - 1) / 2) * width
 
 
 def _legend_patches(mpl, colours):
@@ -80,7 +43,7 @@ def delivered_vs_delivery_time(outcomes, path, title):
     Parameters
     ----------
     outcomes : pandas.DataFrame
-        :func:`dronefleet.analysis.run_outcomes` rows: ``rule, tau_minutes, delivered,
+        :func:`dronefleet.delivery.analysis.run_outcomes` rows: ``rule, tau_minutes, delivered,
         median_delivery_time_s``.
     path : str or Path
         PNG file to write.
@@ -122,7 +85,7 @@ def aborted_by_tau(outcomes, path, title):
     Parameters
     ----------
     outcomes : pandas.DataFrame
-        :func:`dronefleet.analysis.run_outcomes` rows: ``rule, tau_minutes, aborted_pct``.
+        :func:`dronefleet.delivery.analysis.run_outcomes` rows: ``rule, tau_minutes, aborted_pct``.
     path : str or Path
     title : str
 
@@ -159,7 +122,7 @@ def backlog_bars(backlog, path, title):
     Parameters
     ----------
     backlog : pandas.DataFrame
-        :func:`dronefleet.analysis.backlog_by_arrival_week` rows: ``rule, tau_minutes, seed,
+        :func:`dronefleet.delivery.analysis.backlog_by_arrival_week` rows: ``rule, tau_minutes, seed,
         arrival_week, backlog_age_s``.
     path : str or Path
     title : str
@@ -195,7 +158,7 @@ def accuracy_over_weeks(accuracy, path, title):
     Parameters
     ----------
     accuracy : pandas.DataFrame
-        :func:`dronefleet.analysis.weekly_accuracy` rows: ``rule, week, uavs,
+        :func:`dronefleet.delivery.analysis.weekly_accuracy` rows: ``rule, week, uavs,
         mean_accuracy, ci_low, ci_high, confidence``.
     path : str or Path
     title : str
@@ -227,7 +190,7 @@ def winner_soh_heatmaps(grid, path, title):
     Parameters
     ----------
     grid : pandas.DataFrame
-        :func:`dronefleet.analysis.winner_soh_grid` rows: ``soc, distance_m, mass_kg,
+        :func:`dronefleet.delivery.analysis.winner_soh_grid` rows: ``soc, distance_m, mass_kg,
         mean_winner_soh``.
     path : str or Path
     title : str
@@ -263,7 +226,7 @@ def write_threshold_table(table, path):
     Parameters
     ----------
     table : pandas.DataFrame
-        :func:`dronefleet.analysis.threshold_table`'s table.
+        :func:`dronefleet.delivery.analysis.threshold_table`'s table.
     path : str or Path
         File name; its suffix is replaced by ``.csv`` and ``.md``.
 
@@ -300,7 +263,7 @@ def pending_bars(pending, path, title):
     Parameters
     ----------
     pending : pandas.DataFrame
-        :func:`dronefleet.analysis.backlog_by_arrival_week` rows with ``by=("rule",)``:
+        :func:`dronefleet.delivery.analysis.backlog_by_arrival_week` rows with ``by=("rule",)``:
         ``rule, seed, arrival_week, pending``.
     path : str or Path
     title : str

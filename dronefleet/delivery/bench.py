@@ -1,4 +1,4 @@
-"""Benchmark of the paper scenario: ``python -m dronefleet.bench [--runs N] [--warm]``.
+"""Benchmark of the paper scenario: ``python -m dronefleet.delivery.bench [--runs N] [--warm]``.
 
 Prints the compile time (a child process compiles the engine into a fresh, empty numba
 cache; skipped with ``--warm``, which uses the existing cache), wall seconds per 8-week
@@ -24,14 +24,14 @@ from pathlib import Path
 
 def compile_engine():
     """Compile (or load from the cache) everything a paper run needs, with a short run."""
-    from .config import default_config, replace
+    from ..config import default_config, replace
     from .simulation import simulate
 
     simulate(replace(default_config(), horizon_weeks=0.1))
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m dronefleet.bench", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m dronefleet.delivery.bench", description=__doc__)
     parser.add_argument("--runs", type=int, default=5, help="timed runs after compilation (default 5)")
     parser.add_argument("--warm", action="store_true", help="use the existing numba cache instead of compiling")
     parser.add_argument("--sweep", metavar="FILE", help="time this sweep instead, e.g. configs/sweeps/rules.toml")
@@ -42,12 +42,12 @@ def main(argv=None):
         # Set before numba is imported here and in the child, which fills the cache.
         os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="dronefleet-bench-")
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-c", "import dronefleet.bench as b; b.compile_engine()"], check=True)
+        subprocess.run([sys.executable, "-c", "import dronefleet.delivery.bench as b; b.compile_engine()"], check=True)
         compile_s = time.perf_counter() - start
     if args.sweep:
         return bench_sweep(args.sweep, args.jobs, compile_s)
 
-    from .config import default_config, replace
+    from ..config import default_config, replace
     from .simulation import simulate
 
     config = default_config()  # 25 UAVs, 8 weeks, tau = 15 min, least_confident
@@ -74,7 +74,7 @@ def main(argv=None):
 
 def bench_sweep(path, jobs, compile_s):
     """Run every run of the sweep file ``path`` on ``jobs`` processes into a temporary directory; print the times."""
-    from .sweep import available_cpus, load_sweep, run_sweep
+    from ..sweep import available_cpus, load_sweep, run_sweep
 
     sweep = load_sweep(path)
     jobs = jobs or available_cpus()

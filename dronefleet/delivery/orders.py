@@ -5,7 +5,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .fpmath import log
+from ..fpmath import log
 
 #: Orders are drawn in fixed-size blocks so that the stream does not depend on the
 #: horizon: a shorter run sees exactly the first orders of a longer one.

@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from .fpmath import log
+from ..fpmath import log
 
 BIDS_ON = {"policy": 0, "soc_threshold": 1, "any": 2}
 

@@ -5,7 +5,7 @@ order: orders, SoH, learners (one child per UAV), random bids. Each stream is
 consumed in a way that does not depend on the horizon, so a shorter run is exactly
 the beginning of a longer one with the same seed.
 
-A run can start from a saved fleet (``config.fleet_file``, see :mod:`dronefleet.fleet`)
+A run can start from a saved fleet (``config.fleet_file``, see :mod:`dronefleet.delivery.fleet`)
 instead of a new one: its operating period is then the saved fleet's plus one, and
 its streams come from (seed, period), so a second period sees fresh orders even
 with the seed of the first.
@@ -18,12 +18,12 @@ import numpy as np
 
 from . import engine
 from .auction import BIDS_ON, RULES
-from .config import SECONDS_PER_WEEK
+from ..config import SECONDS_PER_WEEK
 from .energy import charge_rate, config_power, drain_per_watt
 from .fleet import load_fleet
 from .orders import generate_orders
 from .policy import initial_fit, optimal_init, standardise
-from .supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
+from ..supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
 
 
 @dataclass
@@ -101,10 +101,10 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
     """The state at t = 0: an empty queue, orders to come, and the fleet at the FC.
 
     A new fleet has drawn SoH, fitted initial policies and full batteries. ``fleet`` (a
-    :class:`~dronefleet.fleet.SavedFleet`; default: ``config.fleet_file`` if set) gives
+    :class:`~dronefleet.delivery.fleet.SavedFleet`; default: ``config.fleet_file`` if set) gives
     SoH, policies, step counters and SoC instead; its lost UAVs stay lost.
     ``supervisor`` is a path to a Nadzoru 2 file (default: the packaged UAV controller).
-    ``orders`` (an :class:`~dronefleet.orders.Orders`) and ``soh`` ((n_uavs,) array) replace
+    ``orders`` (an :class:`~dronefleet.delivery.orders.Orders`) and ``soh`` ((n_uavs,) array) replace
     the drawn ones, for hand-made scenarios; the streams are split the same way regardless.
     """
     if fleet is None and config.fleet_file:

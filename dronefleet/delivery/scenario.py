@@ -1,23 +1,24 @@
 """The UAV delivery scenario behind the :mod:`dronefleet.scenarios` contract.
 
-A thin adaptor over the delivery modules where they are today (config, simulation,
-records, metrics, fleet, cli): it adds no behaviour and changes no output byte. The
-schema is :data:`dronefleet.config.PARAMETERS` (units in each doc), validation
-:func:`dronefleet.config.load_config`, the tables those of :mod:`dronefleet.records`.
-``dronefleet run`` keeps its own delivery path for what only delivery has (fleet
-files, the progress bar in weeks); it prints and writes exactly what this module does.
+A thin adaptor over the delivery modules (this subpackage, the schema in
+:mod:`dronefleet.config`, the summary in :mod:`dronefleet.cli`): it adds no behaviour
+and changes no output byte. The schema is :data:`dronefleet.config.PARAMETERS` (units in
+each doc), validation :func:`dronefleet.config.load_config`, the tables those of
+:mod:`dronefleet.delivery.records`. ``dronefleet run`` keeps its own delivery path for
+what only delivery has (fleet files, the progress bar in weeks); it prints and writes
+exactly what this module does.
 """
 
 import re
 
-from .config import PARAMETERS, AnyText, Interval, Options, default_config, load_config
-from .scenarios import Field
+from ..config import PARAMETERS, AnyText, Interval, Options, default_config, load_config
+from ..scenarios import Field
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "load", "read_config", "simulate",
            "format_summary", "describe", "label"]
 
 NAME = "delivery"
-TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.records.TABLES
+TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
 FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
 
 
@@ -28,7 +29,7 @@ def _allowed(constraint):
         return " | ".join(map(repr, constraint.values))
     if isinstance(constraint, AnyText):
         return "any text"
-    return "a registered winner rule"  # RegisteredRule: listed by dronefleet.auction.RULES
+    return "a registered winner rule"  # RegisteredRule: listed by dronefleet.delivery.auction.RULES
 
 
 def _field(p):
@@ -52,7 +53,8 @@ def read_config(path):
 
 
 def simulate(config):
-    """One run of ``config`` (its fleet file, if any, loaded first) -> the tables of :mod:`dronefleet.records`."""
+    """One run of ``config`` (its fleet file, if any, loaded first) -> its tables
+    (:mod:`dronefleet.delivery.records`)."""
     from .fleet import load_fleet
     from .records import tables
     from .simulation import simulate as run
@@ -63,7 +65,7 @@ def simulate(config):
 
 def format_summary(tables):
     """The run's metrics as ``dronefleet run`` prints them, from its summary table."""
-    from .cli import format_summary as lines
+    from ..cli import format_summary as lines
 
     return lines(tables["summary"].to_pylist()[0])
 

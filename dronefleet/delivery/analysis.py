@@ -85,7 +85,7 @@ def run_outcomes(summary, by=("rule", "tau_minutes")):
     ----------
     summary : pandas.DataFrame
         The sweep's ``summary`` table: one row per run, with the grid keys ``by``, ``seed``
-        and the metrics of :func:`dronefleet.metrics.run_metrics`.
+        and the metrics of :func:`dronefleet.delivery.metrics.run_metrics`.
     by : sequence of str
         Grid keys that, with ``seed``, identify a run.
 
@@ -112,7 +112,7 @@ def run_outcomes(summary, by=("rule", "tau_minutes")):
 def backlog_by_arrival_week(orders, horizon_s, by=("rule", "tau_minutes")):
     """Pending orders and backlog age at the horizon by arrival week, for every run.
 
-    The same computation as :func:`dronefleet.metrics.by_arrival_week`, done for all runs
+    The same computation as :func:`dronefleet.delivery.metrics.by_arrival_week`, done for all runs
     at once. Figures 16c and 19c stack ``backlog_age_s``; Figure 20 compares ``pending``
     with and without reservations (``by=("rule",)``).
 

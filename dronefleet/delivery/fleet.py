@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import ConfigError
+from ..config import ConfigError
 
 #: Columns a fleet file must have.
 COLUMNS = ("t_s", "uav", "soh", "w_distance", "w_mass", "w_soc", "intercept", "steps", "soc", "lost", "period")
@@ -198,7 +198,8 @@ def save_fleet(result, path):
     """
     import pyarrow.compute as pc
 
-    from .records import fleet_table, write_table
+    from ..records import write_table
+    from .records import fleet_table
 
     path = seeded_path(path, result.config.seed)
     table = fleet_table(result)

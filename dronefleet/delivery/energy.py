@@ -8,7 +8,7 @@ fulfilment centre. Nothing here steps time.
 import numpy as np
 from numba import njit
 
-from .fpmath import exp
+from ..fpmath import exp
 
 SECONDS_PER_HOUR = 3600.0
 

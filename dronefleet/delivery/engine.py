@@ -25,9 +25,9 @@ from numba import njit
 
 from .auction import bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
-from .fpmath import log
+from ..fpmath import log
 from .policy import decision, sgd_step
-from .supervisor import take
+from ..supervisor import take
 
 # UAV modes. RESERVED: at the FC, charging, committed to an order it takes off with later.
 IDLE, OUTBOUND, RETURNING, LOST, RESERVED = 0, 1, 2, 3, 4

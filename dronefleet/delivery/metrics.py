@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from .config import SECONDS_PER_WEEK
+from ..config import SECONDS_PER_WEEK
 from .energy import capable, config_power, drain_per_watt
 from .engine import IN_FLIGHT, OUTCOME_ABORTED, OUTCOME_DELIVERED
 from .policy import standardise
@@ -73,7 +73,7 @@ def by_arrival_week(arrival_s, delivered_s, horizon_s, run=None):
         End of the run(s), s.
     run : array_like of int, shape (n_orders,), optional
         Run index 0..n_runs-1 of each order, to tabulate many runs of the same horizon at
-        once (``dronefleet.analysis.backlog_by_arrival_week`` does); default one run.
+        once (``dronefleet.delivery.analysis.backlog_by_arrival_week`` does); default one run.
 
     Returns
     -------

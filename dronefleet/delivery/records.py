@@ -1,0 +1,146 @@
+"""A delivery run's tables (MODEL.md section 10) and its metrics (section 11), written and
+read back through the shared :mod:`dronefleet.records`.
+
+Schemas (times in seconds from the start of the run, SoC in percent, null = did not happen
+by the horizon):
+
+``orders``: order_id int32, arrival_s, arrival_week int16 (1 = first week), distance_m, mass_kg,
+attempts int16, winners list<int16> (UAVs of its attempts in order), delivered_s, delivery_time_s.
+(An order reserved but not yet flown at the horizon has no attempt: the UAV waits for it; the
+summary's reservations_won counts it.)
+
+``attempts``: attempt_id int32, uav int16, order_id int32, takeoff_s, takeoff_soc,
+outcome string (in_flight | delivered | aborted | lost: the UAV did not come back),
+parcel_delivered bool, turn_s (delivery or abort instant), return_s (landing or loss instant),
+return_soc, allocated_s (auction won), reserved bool (won by a reservation bid),
+wait_s (takeoff_s - allocated_s), forecast_wait_s (the reservation bid; null if not reserved),
+forecast_met bool (reserved attempts whose parcel has turned: whether the forecast that the
+UAV can deliver once charged held, i.e. it delivered; null otherwise).
+
+``fleet``: one row per UAV at the end of every week (and at the horizon): week int16, t_s,
+uav int16, soh, w_distance, w_mass, w_soc, intercept (policy on standardised features),
+steps (learner step counter t_), soc (null once lost), lost bool, decision_accuracy
+(:func:`dronefleet.delivery.metrics.decision_accuracy` of the policy then, on the run's test points),
+period int16 (operating period: 1, or the saved fleet's plus one for a warm start).
+
+``timeseries``: t_s, delivered, unallocated, in_flight, aborted_attempts, idle, lost, reserved
+(int64 counts at that instant, after every event at it).
+
+``summary``: one row: seed, rule, tau_minutes, n_uavs, horizon_weeks, period, then the metrics of
+:func:`dronefleet.delivery.metrics.run_metrics`.
+"""
+
+import numpy as np
+import pyarrow as pa
+
+from ..config import SECONDS_PER_WEEK, config_from_dict
+from ..records import read_config_dict, write_tables
+from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
+
+TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
+
+
+def _nullable(values):
+    return pa.array(values, from_pandas=True)  # nan -> null
+
+
+def orders_table(result):
+    o, a = result.orders, result.attempts
+    n = o["arrival_s"].shape[0]
+    by_order = np.argsort(a["order"], kind="stable")
+    offsets = np.concatenate(([0], np.cumsum(np.bincount(a["order"], minlength=n)))).astype(np.int32)
+    winners = pa.ListArray.from_arrays(pa.array(offsets), pa.array(a["uav"][by_order].astype(np.int16)))
+    return pa.table({
+        "order_id": pa.array(np.arange(n, dtype=np.int32)),
+        "arrival_s": o["arrival_s"],
+        "arrival_week": (o["arrival_s"] // SECONDS_PER_WEEK).astype(np.int16) + np.int16(1),
+        "distance_m": o["distance_m"],
+        "mass_kg": o["mass_kg"],
+        "attempts": o["attempts"].astype(np.int16),
+        "winners": winners,
+        "delivered_s": _nullable(o["delivered_s"]),
+        "delivery_time_s": _nullable(o["delivered_s"] - o["arrival_s"]),
+    })
+
+
+def attempts_table(result):
+    a = result.attempts
+    n = a["uav"].shape[0]
+    outcome = np.where(a["lost"], "lost", np.array(OUTCOME_NAMES)[a["outcome"]])
+    reserved = ~np.isnan(a["forecast_wait_s"])
+    turned = a["outcome"] != IN_FLIGHT
+    return pa.table({
+        "attempt_id": pa.array(np.arange(n, dtype=np.int32)),
+        "uav": a["uav"].astype(np.int16),
+        "order_id": a["order"].astype(np.int32),
+        "takeoff_s": a["takeoff_s"],
+        "takeoff_soc": a["takeoff_soc"],
+        "outcome": pa.array(outcome.tolist(), pa.string()),
+        "parcel_delivered": a["outcome"] == OUTCOME_DELIVERED,
+        "turn_s": _nullable(a["turn_s"]),
+        "return_s": _nullable(a["return_s"]),
+        "return_soc": _nullable(a["return_soc"]),
+        "allocated_s": a["allocated_s"],
+        "reserved": reserved,
+        "wait_s": a["takeoff_s"] - a["allocated_s"],
+        "forecast_wait_s": _nullable(a["forecast_wait_s"]),
+        "forecast_met": pa.array(np.where(reserved & turned, a["outcome"] == OUTCOME_DELIVERED, None).tolist(),
+                                 pa.bool_()),
+    })
+
+
+def fleet_table(result):
+    from .metrics import accuracy_points, decision_accuracy  # pandas: only for delivery's tables
+
+    columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
+                                     "intercept", "steps", "soc", "lost", "decision_accuracy")}
+    points = accuracy_points(result.config)
+    for snap in result.snapshots:
+        s = snap["soh"].shape[0]
+        columns["week"].append(np.full(s, np.ceil(snap["t_s"] / SECONDS_PER_WEEK), np.int16))
+        columns["t_s"].append(np.full(s, snap["t_s"]))
+        columns["uav"].append(np.arange(s, dtype=np.int16))
+        for name in ("soh", "intercept", "steps", "soc", "lost"):
+            columns[name].append(snap[name])
+        for j, name in enumerate(("w_distance", "w_mass", "w_soc")):
+            columns[name].append(snap["coef"][:, j])
+        columns["decision_accuracy"].append(
+            decision_accuracy(snap["coef"], snap["intercept"], snap["soh"], result.config, points))
+    table = {name: np.concatenate(parts) for name, parts in columns.items()}
+    table["soc"] = _nullable(table["soc"])  # a lost UAV has none
+    table["period"] = np.full(table["uav"].shape[0], result.period, np.int16)
+    return pa.table(table)
+
+
+def timeseries_table(result):
+    s = result.series
+    return pa.table({
+        "t_s": s["t_s"], "delivered": s["delivered"], "unallocated": s["unallocated"],
+        "in_flight": s["in_flight"], "aborted_attempts": s["aborted"], "idle": s["idle"], "lost": s["lost"],
+        "reserved": s["reserved"],
+    })
+
+
+def summary_table(result):
+    from .metrics import run_metrics
+
+    c = result.config
+    row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,
+               horizon_weeks=c.horizon_weeks, period=result.period, **run_metrics(result))
+    return pa.table({key: [value] for key, value in row.items()})
+
+
+def tables(result):
+    """All tables of a run, by name (see the module doc for their schemas)."""
+    return {"orders": orders_table(result), "attempts": attempts_table(result), "fleet": fleet_table(result),
+            "timeseries": timeseries_table(result), "summary": summary_table(result)}
+
+
+def write_run(result, out_dir, overwrite=False):
+    """Write every table of the delivery run ``result``: :func:`dronefleet.records.write_tables` of :func:`tables`."""
+    return write_tables(tables(result), out_dir, result.config, overwrite)
+
+
+def read_config(path):
+    """The resolved delivery config embedded in a dronefleet parquet file."""
+    return config_from_dict(read_config_dict(path))

@@ -398,7 +398,7 @@ LAYOUT_FILE = "_layout.json"
 def _found_layout(out: Path) -> tuple[str, ...] | None:
     """The partition keys of the dataset ``out``: from its :data:`LAYOUT_FILE` or, in a dataset
     written before that file existed, from its partition directories; None if it holds none."""
-    from .records import TABLES
+    from .delivery.records import TABLES
 
     record = out / LAYOUT_FILE
     try:

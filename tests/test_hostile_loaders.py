@@ -13,7 +13,6 @@ import math
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +29,6 @@ from dronefleet.records import write_table
 from dronefleet.supervisor import (BUILTIN_CONTROLLER, MAX_FILE_BYTES, SupervisorFileError,
                                    load_supervisor)
 
-#: A refusal ends well within this [s]; a hang or a real run would not (generous: shared CI machines).
-GUARD_S = 20.0
 N_UAVS = 3
 REPO = Path(dronefleet.__file__).resolve().parent.parent
 
@@ -253,22 +250,22 @@ if hasattr(os, "geteuid") and os.geteuid() != 0:  # root reads any file
 
 
 def run_cli(argv, capsys):
-    start = time.perf_counter()
     code = cli.main(["run", *argv])
-    return code, capsys.readouterr(), time.perf_counter() - start
+    return code, capsys.readouterr()
 
 
 @pytest.mark.parametrize("name, argv, fragment", HOSTILE, ids=[row[0] for row in HOSTILE])
-def test_hostile_input_is_refused_in_one_line(name, argv, fragment, tmp_path, capsys):
+def test_hostile_input_is_refused_in_one_line(name, argv, fragment, tmp_path, capsys, monkeypatch):
+    # Refused before any work: the simulation is never started.
+    monkeypatch.setattr(simulation, "simulate", lambda *a, **k: pytest.fail("the run was simulated"))
     out = tmp_path / "out"
-    code, captured, wall = run_cli([*argv(tmp_path), "--out", str(out)], capsys)
+    code, captured = run_cli([*argv(tmp_path), "--out", str(out)], capsys)
     assert code == 2
     lines = captured.err.splitlines()
     assert len(lines) == 1 and lines[0].startswith("dronefleet: error: "), captured.err
     assert fragment in lines[0]
     assert len(lines[0]) < 600  # no value printed whole
     assert not out.exists()
-    assert wall < GUARD_S
 
 
 SUBPROCESS_ROWS = ["tau 1e-9 min", "seed 2**63", "config in Latin-1", "fleet SoH nan", "threshold 0, advert 1 ms"]
@@ -340,11 +337,9 @@ HOSTILE_SUPERVISORS = [
 def test_hostile_supervisor_file_is_refused_in_one_line(name, data, fragment, tmp_path):
     path = tmp_path / "controller.yaml"
     path.write_bytes(data)
-    start = time.perf_counter()
     with pytest.raises(SupervisorFileError) as error:
         load_supervisor(path)
     message = str(error.value)
-    assert time.perf_counter() - start < GUARD_S
     assert fragment in message and "\n" not in message and len(message) < 600, message
     assert message.startswith(str(path))
 
@@ -366,7 +361,7 @@ def test_a_bad_supervisor_file_reaches_the_command_line_as_one_line(tmp_path, ca
     bomb.write_text(BOMB)
     monkeypatch.setattr(simulation, "BUILTIN_CONTROLLER", bomb)
     out = tmp_path / "out"
-    code, captured, wall = run_cli(["--set", "horizon_weeks=0.01", "--out", str(out)], capsys)
-    assert code == 2 and not out.exists() and wall < 3 * GUARD_S
+    code, captured = run_cli(["--set", "horizon_weeks=0.01", "--out", str(out)], capsys)
+    assert code == 2 and not out.exists()
     assert captured.err.splitlines() == [f"dronefleet: error: {bomb}: uses a YAML alias at line 2, column 8; "
                                          "aliases are not allowed (Nadzoru 2 writes none)"]

@@ -4,21 +4,15 @@
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery."""
 
 import argparse
-import errno
 import hashlib
 import os
 import sys
-import tempfile
 import time
-from contextlib import contextmanager, suppress
 from pathlib import Path
 
 from . import provenance, scenarios, sweep
 from .config import SECONDS_PER_WEEK, ConfigError, load_config
-
-
-class OutputError(ConfigError):
-    """An output path that cannot take the run's files, or a write that failed (disk full, ...)."""
+from .outputs import OutputError, probe_folders, writing
 
 
 class ProgressBar:
@@ -75,34 +69,6 @@ def default_out(name, config, tag=None):
     return Path("results") / "runs" / f"{name}-{tag or f'seed{config.seed}'}-{digest}"
 
 
-@contextmanager
-def _writing(path):
-    """Turn an OSError while writing ``path`` (disk full, read-only, ...) into a one-line OutputError."""
-    try:
-        yield
-    except OSError as error:
-        raise OutputError(f"cannot write {str(path)!r}: {error.strerror or error}") from None
-
-
-def _probe_folders(folders):
-    """Create ``folders`` (and their parents) if needed and check that files can be made in them;
-    if one cannot, remove the folders made here and raise OutputError."""
-    made = []
-    try:
-        for folder in folders:
-            with _writing(folder):
-                if folder.exists() and not folder.is_dir():
-                    raise NotADirectoryError(errno.ENOTDIR, "Not a directory")
-                made += [path for path in (folder, *folder.parents) if not path.exists()]  # deepest first
-                folder.mkdir(parents=True, exist_ok=True)
-                os.rmdir(tempfile.mkdtemp(prefix=".dronefleet-probe-", dir=folder))
-    except OutputError:
-        for path in made:
-            with suppress(OSError):
-                path.rmdir()
-        raise
-
-
 def check_outputs(out, save_fleet, overwrite, tables=None):
     """Refuse, before any work, outputs that the run could not write or would silently replace.
 
@@ -120,7 +86,7 @@ def check_outputs(out, save_fleet, overwrite, tables=None):
     if save_fleet is not None and Path(os.path.abspath(save_fleet)).is_relative_to(os.path.abspath(out)):
         raise OutputError(f"--save-fleet {str(save_fleet)!r} lies inside --out {str(out)!r}, which is written "
                           "(and replaced) whole; save the fleet outside it")
-    with _writing(out):
+    with writing(out):
         clean_leftovers(out)  # first: it may put back a run that a killed --overwrite had set aside
         state = run_dir_state(out, tables or TABLES)
     if state == "file":
@@ -136,7 +102,7 @@ def check_outputs(out, save_fleet, overwrite, tables=None):
         if save_fleet.exists() and not overwrite:
             raise OutputError(f"--save-fleet {str(save_fleet)!r} exists; pass --overwrite to replace it "
                               "or choose another --save-fleet")
-    _probe_folders([out.parent, *([save_fleet.parent] if save_fleet is not None else [])])
+    probe_folders([out.parent, *([save_fleet.parent] if save_fleet is not None else [])])
 
 
 def run(args):
@@ -169,10 +135,10 @@ def run(args):
     wall = time.perf_counter() - start
     # The fleet file first: if either write fails, neither output is left behind.
     if fleet_out is not None:
-        with _writing(fleet_out):
+        with writing(fleet_out):
             saved = save_fleet(result, fleet_out)
     try:
-        with _writing(out):
+        with writing(out):
             write_run(result, out, overwrite=args.overwrite)
     except BaseException:
         if fleet_out is not None:
@@ -203,7 +169,7 @@ def run_scenario(scenario, args):
     start = time.perf_counter()
     tables = scenario.simulate(config)
     wall = time.perf_counter() - start
-    with _writing(out):
+    with writing(out):
         write_tables(tables, out, config, overwrite=args.overwrite)
     print(scenario.format_summary(tables))
     print(f"  {'wall time':<22}{wall:.2f} s")

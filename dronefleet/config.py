@@ -62,6 +62,7 @@ __all__ = [
     "config_from_dict",
     "default_config",
     "load_config",
+    "read_toml",
     "replace",
     "run_size",
 ]
@@ -596,26 +597,30 @@ def config_from_dict(d: Mapping[str, Any]) -> Config:
     return Config(**_flatten(d))
 
 
-def _read_toml(path: str | PathLike) -> dict[str, Any]:
-    """The TOML document in ``path``; ConfigError if unreadable, too big, not UTF-8 or not TOML."""
-    where = f"config file {str(path)!r}"
+def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dict[str, Any]]:
+    """The text and TOML document of the ``kind`` (config, sweep or grid file) in ``path``.
+
+    ConfigError, naming the file, if it is not a regular file (a pipe would block), cannot be
+    read, is larger than :data:`MAX_CONFIG_BYTES`, is not UTF-8 or is not TOML.
+    """
+    where = f"{kind} {str(path)!r}"
     try:
         # Only a regular file: opening a pipe would wait for a writer for ever.
         if not stat.S_ISREG(os.stat(path).st_mode):
             raise ConfigError(f"{where} is not a regular file (a folder, pipe or device); give a TOML file")
         with open(path, "rb") as fh:
-            data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the path may be a device or a pipe
+            data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the file may have grown
     except OSError as e:
         raise ConfigError(f"cannot read {where}: {e.strerror or e}") from None
     if len(data) > MAX_CONFIG_BYTES:
-        raise ConfigError(f"{where} is larger than {MAX_CONFIG_BYTES} bytes; a config file is a few KB of TOML")
+        raise ConfigError(f"{where} is larger than {MAX_CONFIG_BYTES} bytes; a {kind} is a few KB of TOML")
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as e:
         raise ConfigError(f"{where} is not UTF-8 text (byte {data[e.start]:#04x} at offset {e.start}); "
                           "save it as UTF-8") from None
     try:
-        return tomllib.loads(text)
+        return text, tomllib.loads(text)
     except ValueError as e:  # TOMLDecodeError, or an integer of too many digits
         raise ConfigError(f"cannot parse {where}: {e}") from None
     except RecursionError:
@@ -654,7 +659,7 @@ def load_config(path: str | PathLike | None = None,
     parsed = [(_parse_override(o), o) for o in overrides]
     flat: dict[str, Any] = {}
     if path is not None:
-        document = _read_toml(path)
+        _, document = read_toml(path)
         # the other scenarios' configs name theirs (dronefleet.scenarios); delivery's may
         scenario = document.pop(SCENARIO_KEY, "delivery")
         if scenario != "delivery":

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 from types import ModuleType
 from typing import Callable
 
-from .config import SCENARIO_KEY, ConfigError, _read_toml, _show, _suggest
+from .config import SCENARIO_KEY, ConfigError, _show, _suggest, read_toml
 
 __all__ = ["Field", "Scenario", "SCENARIOS", "get", "scenario_of", "load"]
 
@@ -145,7 +145,7 @@ def scenario_of(path) -> Scenario:
     file: delivery)."""
     if path is None:
         return SCENARIOS["delivery"]
-    document = _read_toml(path)
+    _, document = read_toml(path)
     return get(document.get(SCENARIO_KEY, "delivery"), f"config file {str(path)!r}: ")
 
 

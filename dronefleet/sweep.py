@@ -58,14 +58,15 @@ import re
 import shlex
 import sys
 import time
-import tomllib
 import traceback
 from contextlib import suppress
 from dataclasses import dataclass, fields
 from pathlib import Path
 from urllib.parse import quote
 
-from .config import PARAMETERS, Config, ConfigError, default_config, load_config, replace, resolve_key
+from .config import (PARAMETERS, Config, ConfigError, default_config, load_config, read_toml, replace,
+                     resolve_key)
+from .outputs import OutputError, probe_folders
 
 #: Environment variables that give a job-array task's index, with the index of the
 #: scheduler's first task: SGE and LSF arrays start at 1, so their task k is index k + 1.
@@ -237,12 +238,9 @@ def load_sweep(path, changes=None, seeds=None) -> Sweep:
     """
     path = Path(path)
     try:
-        text = path.read_text()
-        doc = tomllib.loads(text)
-    except OSError as error:
-        raise SweepError(f"cannot read sweep file {str(path)!r}: {error.strerror or error}") from None
-    except tomllib.TOMLDecodeError as error:
-        raise SweepError(f"cannot parse sweep file {str(path)!r}: {error}") from None
+        text, doc = read_toml(path, "sweep file")
+    except ConfigError as error:
+        raise SweepError(str(error)) from None
     _check_names(doc, _SECTIONS, f"{path}: sections")
     head = doc.get("sweep", {})
     if not isinstance(head, dict):
@@ -451,11 +449,9 @@ def _probe(folders, allowed: str, keep: bool = True) -> None:
     """Refuse, before any run, folders that cannot be made or written (a file in the way, read-only),
     leaving none made; ``allowed`` says what the flags must be. Without ``keep``, the folders
     made to probe are removed again (a refusal that comes later then leaves nothing either)."""
-    from .cli import OutputError, _probe_folders
-
     made = [path for folder in folders for path in (folder, *folder.parents) if not path.exists()]  # deepest first
     try:
-        _probe_folders(folders)
+        probe_folders(folders)
     except OutputError as error:
         raise SweepError(f"{error}: {allowed}") from None
     for path in [] if keep else made:

@@ -17,13 +17,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 import itertools
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from ..config import ConfigError, read_toml
 from ..sweep import SweepError
 from .bounds import BoundUndefinedError, bounds
 from .params import Params, ParamsError
@@ -92,11 +92,9 @@ def load_grid(path, changes=None, trials=None) -> Grid:
     """
     path = Path(path)
     try:
-        doc = tomllib.loads(path.read_text())
-    except OSError as error:
-        raise SweepError(f"cannot read grid file {str(path)!r}: {error.strerror or error}") from None
-    except tomllib.TOMLDecodeError as error:
-        raise SweepError(f"cannot parse grid file {str(path)!r}: {error}") from None
+        _, doc = read_toml(path, "grid file")
+    except ConfigError as error:
+        raise SweepError(str(error)) from None
     _check_names(doc, _SECTIONS, f"{path}: sections")
     head = doc.get("sweep", {})
     _check_names(head, _SWEEP_KEYS, f"{path}: [sweep]")

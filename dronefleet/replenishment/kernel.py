@@ -860,12 +860,14 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                 if trace:
                     tr_event[tr, t - 1, i] = event
 
-            # 5. energy (section 7): workers, then MCs in id-string order
-            for i in range(nw):
+            # 5. energy (section 7): workers (with work and transfers), then MCs; an MC's own
+            # step comes after the transfers that drew on it, as in the code.
+            for i in range(n):
+                is_worker = i < nw
                 e0 = energy[tr, i]
                 e = max(e0 - v_min, 0.0)
                 consumed[tr, i] += v_min
-                if working[tr, i] and ever_counted[tr, i]:
+                if is_worker and working[tr, i] and ever_counted[tr, i]:
                     e = max(e - v_work, 0.0)
                     consumed[tr, i] += v_work
                     work_energy[tr, i] += v_work
@@ -882,7 +884,7 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                 if e == 0.0:
                     depleted[tr, i] = True
                 energy[tr, i] = e
-                if charging[tr, i]:
+                if is_worker and charging[tr, i]:
                     source = transfer_source(tr, i, nw, sharing, served, mc_rank, dist)
                     if source >= 0:
                         delta = v_charge * (1.0 - loss)
@@ -899,23 +901,6 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         if trace:
                             tr_received[tr, t - 1, i] = e1 - e
                             tr_source[tr, t - 1, i] = source
-            for j in range(nw, n):
-                e0 = energy[tr, j]
-                e = max(e0 - v_min, 0.0)
-                consumed[tr, j] += v_min
-                if charging[tr, j] and in_charging_rect(x[tr, j], y[tr, j]):
-                    e1 = min(e + v_charge, cap[j])
-                    paid[tr, j] += e0 - e
-                    drawn[tr, j] += e1 - e
-                    e0 = e1
-                    e = e1
-                if moving[tr, j]:
-                    e = max(e - v_move, 0.0)
-                    consumed[tr, j] += v_move
-                paid[tr, j] += e0 - e
-                if e == 0.0:
-                    depleted[tr, j] = True
-                energy[tr, j] = e
             points[tr] += n_t
 
             if trace:

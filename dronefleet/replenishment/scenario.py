@@ -37,7 +37,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _read_toml, _show, _suggest
+from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
 from ..scenarios import Field
 from .bounds import COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds
 from .params import BASE_CAPACITY, Params
@@ -215,7 +215,7 @@ def load(path=None, overrides=(), seed=None) -> Config:
     parsed = [(_parse_override(o, _resolve), o) for o in overrides]
     values, origin = dict(DEFAULTS), {}
     if path is not None:
-        values.update(_flatten(_read_toml(path), str(path), origin))
+        values.update(_flatten(read_toml(path)[1], str(path), origin))
     for (name, value), text in parsed:
         values[name] = value
         origin[name] = f"--set {text}"

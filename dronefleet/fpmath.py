@@ -39,7 +39,7 @@ wrapped, which is a bug upstream.
 import math
 
 import numpy as np
-from numba import njit
+from .jit import njit
 
 # --- exp (e_exp.c) -------------------------------------------------------------------------
 _LN2_HI = 6.93147180369123816490e-01   # 0x3fe62e42 fee00000: ln 2 rounded to 32 bits, k * _LN2_HI is exact

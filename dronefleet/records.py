@@ -16,11 +16,51 @@ import shutil
 import socket
 from pathlib import Path
 
+import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .provenance import stamp
 
 CONFIG_KEY = b"dronefleet.config"
+
+
+def arrow_array(values, null=None) -> pa.Array:
+    """A numpy array (or a list of scalars) as an Arrow array, built from its buffers.
+
+    ``pyarrow.array`` imports pandas (0.3-0.4 s, most of a run's start-up) to ask whether its
+    input is a pandas object; the tables of a run never hold one, so their columns are made
+    here from the values' memory instead. Types follow numpy's: integers and floats keep their
+    width, ``bool`` becomes Arrow's bit-packed boolean, strings (``str`` arrays or lists)
+    UTF-8 ``string``; Python ints, floats and bools become int64, float64 and bool.
+
+    Parameters
+    ----------
+    values : numpy.ndarray of shape (n,) or list
+    null : numpy.ndarray of bool, shape (n,), optional
+        True where the value is null (a float column's NaN: pass ``numpy.isnan(values)``).
+    """
+    values = np.asarray(values)
+    n = values.shape[0]
+    validity = None
+    if null is not None and null.any():
+        validity = pa.py_buffer(np.packbits(~null, bitorder="little"))
+    if values.dtype.kind == "U":
+        encoded = [str(value).encode() for value in values]
+        offsets = np.zeros(n + 1, dtype=np.int32)
+        np.cumsum([len(value) for value in encoded], out=offsets[1:])
+        return pa.Array.from_buffers(pa.string(), n, [validity, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))])
+    if values.dtype == np.bool_:
+        return pa.Array.from_buffers(pa.bool_(), n, [validity, pa.py_buffer(np.packbits(values, bitorder="little"))])
+    values = np.ascontiguousarray(values)
+    return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), n, [validity, pa.py_buffer(values)])
+
+
+def arrow_table(columns, metadata=None) -> pa.Table:
+    """``{name: numpy array or arrow array}`` as a table (see :func:`arrow_array`)."""
+    table = pa.table({name: column if isinstance(column, pa.Array) else arrow_array(column)
+                      for name, column in columns.items()})
+    return table if metadata is None else table.replace_schema_metadata(metadata)
 
 
 def _temporary_name(path, kind):

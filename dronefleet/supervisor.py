@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from numba import njit
+from .jit import njit
 
 from .config import ConfigError
 

@@ -3,7 +3,6 @@
 import math
 
 import numpy as np
-import pandas as pd
 
 from ..config import SECONDS_PER_WEEK
 from .energy import capable, config_power, drain_per_watt
@@ -82,6 +81,8 @@ def by_arrival_week(arrival_s, delivered_s, horizon_s, run=None):
         column, if ``run`` is given): arrived, pending (orders not delivered by the
         horizon), backlog_age_s (sum of horizon - arrival over them, s).
     """
+    import pandas as pd  # here, not at the top: a run's start-up never needs it
+
     arrival = np.asarray(arrival_s, dtype=np.float64)
     pending = np.isnan(np.asarray(delivered_s, dtype=np.float64))
     n_weeks = int(np.ceil(horizon_s / SECONDS_PER_WEEK))

@@ -34,14 +34,14 @@ import numpy as np
 import pyarrow as pa
 
 from ..config import SECONDS_PER_WEEK, config_from_dict
-from ..records import read_config_dict, write_tables
+from ..records import arrow_array, arrow_table, read_config_dict, write_tables
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 
 
 def _nullable(values):
-    return pa.array(values, from_pandas=True)  # nan -> null
+    return arrow_array(values, null=np.isnan(values))
 
 
 def orders_table(result):
@@ -49,9 +49,9 @@ def orders_table(result):
     n = o["arrival_s"].shape[0]
     by_order = np.argsort(a["order"], kind="stable")
     offsets = np.concatenate(([0], np.cumsum(np.bincount(a["order"], minlength=n)))).astype(np.int32)
-    winners = pa.ListArray.from_arrays(pa.array(offsets), pa.array(a["uav"][by_order].astype(np.int16)))
-    return pa.table({
-        "order_id": pa.array(np.arange(n, dtype=np.int32)),
+    winners = pa.ListArray.from_arrays(arrow_array(offsets), arrow_array(a["uav"][by_order].astype(np.int16)))
+    return arrow_table({
+        "order_id": np.arange(n, dtype=np.int32),
         "arrival_s": o["arrival_s"],
         "arrival_week": (o["arrival_s"] // SECONDS_PER_WEEK).astype(np.int16) + np.int16(1),
         "distance_m": o["distance_m"],
@@ -69,13 +69,13 @@ def attempts_table(result):
     outcome = np.where(a["lost"], "lost", np.array(OUTCOME_NAMES)[a["outcome"]])
     reserved = ~np.isnan(a["forecast_wait_s"])
     turned = a["outcome"] != IN_FLIGHT
-    return pa.table({
-        "attempt_id": pa.array(np.arange(n, dtype=np.int32)),
+    return arrow_table({
+        "attempt_id": np.arange(n, dtype=np.int32),
         "uav": a["uav"].astype(np.int16),
         "order_id": a["order"].astype(np.int32),
         "takeoff_s": a["takeoff_s"],
         "takeoff_soc": a["takeoff_soc"],
-        "outcome": pa.array(outcome.tolist(), pa.string()),
+        "outcome": outcome,
         "parcel_delivered": a["outcome"] == OUTCOME_DELIVERED,
         "turn_s": _nullable(a["turn_s"]),
         "return_s": _nullable(a["return_s"]),
@@ -84,13 +84,12 @@ def attempts_table(result):
         "reserved": reserved,
         "wait_s": a["takeoff_s"] - a["allocated_s"],
         "forecast_wait_s": _nullable(a["forecast_wait_s"]),
-        "forecast_met": pa.array(np.where(reserved & turned, a["outcome"] == OUTCOME_DELIVERED, None).tolist(),
-                                 pa.bool_()),
+        "forecast_met": arrow_array(a["outcome"] == OUTCOME_DELIVERED, null=~(reserved & turned)),
     })
 
 
 def fleet_table(result):
-    from .metrics import accuracy_points, decision_accuracy  # pandas: only for delivery's tables
+    from .metrics import accuracy_points, decision_accuracy
 
     columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
                                      "intercept", "steps", "soc", "lost", "decision_accuracy")}
@@ -109,12 +108,12 @@ def fleet_table(result):
     table = {name: np.concatenate(parts) for name, parts in columns.items()}
     table["soc"] = _nullable(table["soc"])  # a lost UAV has none
     table["period"] = np.full(table["uav"].shape[0], result.period, np.int16)
-    return pa.table(table)
+    return arrow_table(table)
 
 
 def timeseries_table(result):
     s = result.series
-    return pa.table({
+    return arrow_table({
         "t_s": s["t_s"], "delivered": s["delivered"], "unallocated": s["unallocated"],
         "in_flight": s["in_flight"], "aborted_attempts": s["aborted"], "idle": s["idle"], "lost": s["lost"],
         "reserved": s["reserved"],
@@ -127,7 +126,7 @@ def summary_table(result):
     c = result.config
     row = dict(seed=c.seed, rule=c.rule, tau_minutes=c.tau_minutes, n_uavs=c.n_uavs,
                horizon_weeks=c.horizon_weeks, period=result.period, **run_metrics(result))
-    return pa.table({key: [value] for key, value in row.items()})
+    return arrow_table({key: [value] for key, value in row.items()})
 
 
 def tables(result):

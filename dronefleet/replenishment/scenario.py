@@ -243,9 +243,7 @@ _PHASES = {"workers": ("charging", "to_work", "working", "to_charge"),
 
 def simulate(config: Config) -> dict:
     """Every trial of ``config`` in one kernel call -> ``{"summary", "timeseries"}`` pyarrow tables."""
-    import pyarrow as pa
-
-    from ..records import CONFIG_KEY
+    from ..records import CONFIG_KEY, arrow_table
     from .kernel import TS_CHARGER_PHASE, TS_STORED, TS_WORK, TS_WORKER_PHASE
     from .simulate import simulate as run_trials
 
@@ -259,8 +257,8 @@ def simulate(config: Config) -> dict:
     timeseries["stored_energy"] = series[:, :, TS_STORED].reshape(-1)
     timeseries["work"] = series[:, :, TS_WORK].reshape(-1).astype(np.int64)  # whole points
     metadata = {CONFIG_KEY: config.to_json()}
-    return {"summary": pa.table({name: r[name] for name in summary_columns()}).replace_schema_metadata(metadata),
-            "timeseries": pa.table(timeseries).replace_schema_metadata(metadata)}
+    return {"summary": arrow_table({name: r[name] for name in summary_columns()}, metadata),
+            "timeseries": arrow_table(timeseries, metadata)}
 
 
 def describe(config: Config) -> str:
@@ -312,7 +310,7 @@ def format_summary(tables) -> str:
     lines = [f"  {'over ' + str(summary.num_rows) + ' trials':<22}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
              "   bound"]
     for text, column, fmt, bound in _SUMMARY_ROWS:
-        x = summary.column(column).to_numpy().astype(np.float64)
+        x = np.array(summary.column(column).to_pylist(), dtype=np.float64)  # to_numpy imports pandas
         sd = f"{x.std(ddof=1):{fmt}}" if x.size > 1 else "-"
         shown = beside.get(bound, "")
         if p.mobile and column == "efficiency" and p.transfer_loss != 0:

@@ -56,6 +56,7 @@ BIDS_ON_POLICY, BIDS_ON_SOC_THRESHOLD, BIDS_ON_ANY = 0, 1, 2
 # anything that matters in the model.
 F_MARGIN = 1e-9     # in decision-function units, relative
 SOC_MARGIN = 1e-12  # percent
+THRESHOLD_MARGIN = 1e-9  # relative, on 100 - SoC (see threshold_gap)
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
 #: Tick indices from here on stand for "never" (NO_TICK): k * interval is no longer exact
@@ -233,24 +234,45 @@ def _dequeue(book, fleet, counters, pos):
 
 
 @njit(cache=True)
+def threshold_gap(theta):
+    """A bound on 100 - SoC below which a charging UAV's computed SoC may be >= ``theta``.
+
+    The computed SoC is 100 - x rounded to nearest, which is >= theta only if x is at most
+    100 - theta plus half the spacing of doubles just below theta (SoC 100 itself is
+    reached once x < 2^-47, about 13 days of charging). THRESHOLD_MARGIN covers the
+    rounding of x (exp, products, the tick instant) many times over.
+    """
+    half_ulp = 0.5 * (theta - np.nextafter(theta, -np.inf))
+    return ((100.0 - theta) + half_ulp) * (1.0 + THRESHOLD_MARGIN)
+
+
+@njit(cache=True)
 def _earliest_bid(book, fleet, counters, params, t):
     """A lower bound on when an idle UAV may first bid on a queued order, if nothing else happens.
 
     Returns ``t`` if one may bid now and inf if none ever will. Idle UAVs only charge, so
     their SoC only grows; a rule that bids on its policy (f >= 0) can bid on some order
-    once reach + b + w_soc x_soc >= 0, a threshold rule once SoC >= theta. The time to a
+    once reach + b + w_soc x_soc >= 0, a threshold rule once SoC >= theta (in closed form to
+    within rounding, :func:`threshold_gap`, even for theta = 100). The time to a
     SoC is the inverse of the charging curve. Margins (F_MARGIN, SOC_MARGIN) keep the
     bound below the first tick at which the exact per-order test can succeed. With
     reservations, a UAV whose f grows with SoC can bid (reserve) as soon as f > 0 at
     SoC 100, and then at once, since it need not wait for the charge.
     """
     earliest = np.inf
+    theta_gap = threshold_gap(params.theta)
     for i in range(fleet.mode.shape[0]):
         if fleet.mode[i] != IDLE:
             continue
         soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
         if params.bids_on == BIDS_ON_SOC_THRESHOLD:
-            need = params.theta
+            if soc >= params.theta:
+                return t
+            # From the landing, not from ``soc``: near 100 % the computed SoC has too few
+            # significant digits left in 100 - SoC.
+            earliest = min(earliest, fleet.t_ref[i]
+                           + log((100.0 - fleet.soc_ref[i]) / theta_gap) / params.charge_rate)
+            continue
         else:
             if fleet.reach_stale[i]:
                 best = -np.inf

@@ -34,7 +34,7 @@ The contract: a scenario is a module defining
 Where each scenario's pieces are:
 
 * ``delivery``: :mod:`dronefleet.delivery.scenario` over the subpackage (simulation,
-  engine, metrics, fleet, analysis, figures), with its schema in :mod:`dronefleet.config`.
+  engine, metrics, fleet, analysis, figures), with its schema in :mod:`dronefleet.delivery.config`.
 * ``replenishment``: :mod:`dronefleet.replenishment.scenario` over the subpackage
   (params, simulate, kernel, bounds).
 

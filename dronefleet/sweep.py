@@ -64,8 +64,8 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from urllib.parse import quote
 
-from .config import (PARAMETERS, Config, ConfigError, default_config, load_config, read_toml, replace,
-                     resolve_key)
+from .config import ConfigError, read_toml
+from .delivery.config import PARAMETERS, Config, default_config, load_config, replace, resolve_key
 from .outputs import OutputError, probe_folders
 
 #: Environment variables that give a job-array task's index, with the index of the

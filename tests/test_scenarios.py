@@ -9,7 +9,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from dronefleet import cli, provenance, records, scenarios
-from dronefleet.config import ConfigError, load_config
+from dronefleet.config import ConfigError
+from dronefleet.delivery.config import load_config
 from dronefleet.replenishment import Params, constant_supply_bounds, fixed_bounds
 
 # A tiny run of each registered scenario (a new scenario must add one): config file text, --set.

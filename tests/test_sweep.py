@@ -23,7 +23,7 @@ import pytest
 
 from dronefleet import cli, sweep as sw
 from dronefleet.delivery import simulation
-from dronefleet.config import default_config, replace
+from dronefleet.delivery.config import default_config, replace
 from dronefleet.delivery.records import TABLES
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"

@@ -33,7 +33,7 @@ period int16 (operating period: 1, or the saved fleet's plus one for a warm star
 import numpy as np
 import pyarrow as pa
 
-from ..config import SECONDS_PER_WEEK, config_from_dict
+from .config import SECONDS_PER_WEEK, config_from_dict
 from ..records import read_config_dict, write_tables
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
 

@@ -1,9 +1,9 @@
 """The UAV delivery scenario behind the :mod:`dronefleet.scenarios` contract.
 
 A thin adaptor over the delivery modules (this subpackage, the schema in
-:mod:`dronefleet.config`, the summary in :mod:`dronefleet.cli`): it adds no behaviour
-and changes no output byte. The schema is :data:`dronefleet.config.PARAMETERS` (units in
-each doc), validation :func:`dronefleet.config.load_config`, the tables those of
+:mod:`dronefleet.delivery.config`, the summary in :mod:`dronefleet.cli`): it adds no behaviour
+and changes no output byte. The schema is :data:`dronefleet.delivery.config.PARAMETERS` (units in
+each doc), validation :func:`dronefleet.delivery.config.load_config`, the tables those of
 :mod:`dronefleet.delivery.records`. ``dronefleet run`` keeps its own delivery path for
 what only delivery has (fleet files, the progress bar in weeks); it prints and writes
 exactly what this module does.
@@ -11,7 +11,7 @@ exactly what this module does.
 
 import re
 
-from ..config import PARAMETERS, AnyText, Interval, Options, default_config, load_config
+from .config import PARAMETERS, AnyText, Interval, Options, default_config, load_config
 from ..scenarios import Field
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "load", "read_config", "simulate",
@@ -42,7 +42,7 @@ DEFAULTS = {name: getattr(default_config(), name) for name in PARAMETERS}
 
 
 def load(path=None, overrides=(), seed=None):
-    """:func:`dronefleet.config.load_config`: the one validation entry point of delivery."""
+    """:func:`dronefleet.delivery.config.load_config`: the one validation entry point of delivery."""
     return load_config(path, overrides, seed)
 
 

@@ -2,7 +2,7 @@
 
 Each scenario declares and validates its own schema (:mod:`dronefleet.delivery.config`,
 :mod:`dronefleet.replenishment.scenario`); what they have in common is here, so that every
-config, sweep and grid file is read the same way and every refusal reads alike:
+config and sweep file is read the same way and every refusal reads alike:
 
 * :class:`ConfigError`, the one exception for bad input (a one-line message; exit code 2);
 * :func:`read_toml`, the one reader of TOML files (regular UTF-8 files of at most
@@ -85,7 +85,7 @@ def _parse_override(text: Any, resolve: Callable[[str], str]) -> tuple[str, Any]
 
 
 def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dict[str, Any]]:
-    """The text and TOML document of the ``kind`` (config, sweep or grid file) in ``path``.
+    """The text and TOML document of the ``kind`` (config or sweep file) in ``path``.
 
     ConfigError, naming the file, if it is not a regular file (a pipe would block), cannot be
     read, is larger than :data:`MAX_CONFIG_BYTES`, is not UTF-8 or is not TOML.

@@ -11,7 +11,8 @@ import time
 from pathlib import Path
 
 from . import provenance, scenarios, sweep
-from .config import SECONDS_PER_WEEK, ConfigError, load_config
+from .config import ConfigError
+from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, probe_folders, writing
 
 

@@ -18,7 +18,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .config import default_config, replace
+from .delivery.config import default_config, replace
 
 #: Name -> config changes of the fingerprinted runs (seed 0, 25 UAVs, one week, tau 15 min).
 RUNS = {

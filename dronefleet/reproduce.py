@@ -189,7 +189,7 @@ def _write_runs(study, figure, *selections):
     for name, where in selections:
         runs = study.sweep(name).runs
         keys = list(runs[0].keys)
-        run_id = {tuple(getattr(run.config, key) for key in keys): run.id for run in runs}
+        run_id = {tuple(run.value(key) for key in keys): run.id for run in runs}
         summary = study.table(name, "summary", **where)
         ids = [run_id[point] for point in summary[keys].itertuples(index=False, name=None)]
         frames.append(pd.concat([pd.DataFrame({"sweep": name, "run": ids}), summary], axis=1))

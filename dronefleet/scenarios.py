@@ -1,7 +1,8 @@
 """The scenarios dronefleet simulates, registered once by name, and the contract each implements.
 
-The CLI works on this contract, never on a concrete scenario (``dronefleet run`` keeps a
-delivery-only path for fleet files and the progress bar). A config file names its scenario
+The CLI, the sweeps (:mod:`dronefleet.sweep`: plan, run on local processes, a job array or
+Dask, status, collect) and ``reproduce`` work on this contract, never on a concrete scenario
+(``dronefleet run`` keeps a delivery-only path for fleet files and the progress bar). A config file names its scenario
 with a top-level ``scenario = "<name>"``; a file without the key is a delivery config, so
 every existing config, sweep and result keeps working.
 
@@ -11,13 +12,27 @@ The contract: a scenario is a module defining
     its name in :data:`SCENARIOS`.
 ``SCHEMA``, ``DEFAULTS``
     ``{key: Field(section, unit, allowed, doc)}`` and ``{key: default}``: every config key,
-    its TOML section, unit, allowed values and meaning.
+    its TOML section, unit, allowed values and meaning. A default's type (int, float, str;
+    tuple for a list of numbers) is the key's type: a sweep's partition columns take it.
 ``load(path, overrides, seed) -> config``
     the one validation entry point: the TOML file (or None for the defaults), ``--set``
     strings ``"key=value"`` (``section.key`` or the bare key), a seed (None: the file's).
     Any bad input raises :class:`dronefleet.config.ConfigError` (one line) before any work.
-    ``config.to_json()`` is its deterministic JSON (the default run folder hashes it);
-    ``read_config(path)`` reads it back from a table the scenario wrote.
+    ``config.to_json()`` is its deterministic JSON (the default run folder hashes it),
+    ``config.to_dict()`` the same as sections of a config file; ``read_config(path)`` reads
+    it back from a table the scenario wrote.
+``resolve_key(key) -> name``
+    a key as ``--set`` and sweep files write it (``section.key`` or the bare key) -> the key's
+    name in ``SCHEMA``; ConfigError, listing the allowed keys, if there is none.
+``replace(config, changes) -> config``
+    a validated copy of ``config`` with ``changes`` (``{name: value}``) applied, the types as
+    strict as in ``load``; ConfigError naming the key and what is allowed otherwise.
+``value(config, name)``
+    the value of key ``name`` in ``config``.
+``SEED_KEY``, ``SEEDS_REQUIRED``
+    the key that a sweep's ``[sweep] seeds`` sets, one run per value (the last partition key
+    of a sweep's dataset), and whether a sweep must list them (if not, each configuration is
+    one run at its base config's value).
 ``simulate(config) -> dict[str, pyarrow.Table]``
     the run's tables, named as in ``TABLES`` (which holds ``"summary"``); written by
     :func:`dronefleet.records.write_tables`, atomically, a run folder complete or absent,
@@ -30,11 +45,17 @@ The contract: a scenario is a module defining
     the names of its figures in ``dronefleet reproduce`` (possibly empty).
 ``format_bounds(config) -> str`` (optional)
     analytic bounds, for ``dronefleet bounds``; refusing parameters where none exists.
+``replicates(config) -> range`` (optional)
+    the replicates (trials) a run holds, if a run holds several: a sweep refuses seeds whose
+    runs would hold a replicate twice. Without it, a run is the one replicate its seed names.
+``outdated(config, summary) -> bool`` (optional)
+    True if a done run (its ``summary`` file at the path ``summary``) must run again because
+    an input it read besides its config changed since (delivery: a saved fleet written again).
 
 Where each scenario's pieces are:
 
 * ``delivery``: :mod:`dronefleet.delivery.scenario` over the subpackage (simulation,
-  engine, metrics, fleet, analysis, figures), with its schema in :mod:`dronefleet.config`.
+  engine, metrics, fleet, analysis, figures), with its schema in :mod:`dronefleet.delivery.config`.
 * ``replenishment``: :mod:`dronefleet.replenishment.scenario` over the subpackage
   (params, simulate, kernel, bounds).
 
@@ -90,8 +111,34 @@ class Scenario:
     def defaults(self) -> dict:
         return self.module.DEFAULTS
 
+    @property
+    def seed_key(self) -> str:
+        return self.module.SEED_KEY
+
+    @property
+    def seeds_required(self) -> bool:
+        return self.module.SEEDS_REQUIRED
+
     def load(self, path=None, overrides=(), seed=None):
         return self.module.load(path, overrides, seed)
+
+    def resolve_key(self, key: str) -> str:
+        return self.module.resolve_key(key)
+
+    def replace(self, config, changes):
+        return self.module.replace(config, changes)
+
+    def value(self, config, name: str):
+        return self.module.value(config, name)
+
+    def replicates(self, config) -> range | None:
+        """The replicates a run of ``config`` holds; None if it is the one its seed names."""
+        replicates = getattr(self.module, "replicates", None)
+        return None if replicates is None else replicates(config)
+
+    def outdated(self, config, summary) -> bool:
+        outdated = getattr(self.module, "outdated", None)
+        return outdated is not None and outdated(config, summary)
 
     def read_config(self, path):
         return self.module.read_config(path)

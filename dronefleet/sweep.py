@@ -1,10 +1,10 @@
-"""Parameter sweeps: a grid of config values times seeds, one hive-partitioned dataset.
+"""Parameter sweeps: a grid of config values times seeds, one hive-partitioned dataset, for any scenario.
 
-A sweep file is TOML (``configs/sweeps/``)::
+A sweep file is TOML (``configs/sweeps/``). A delivery sweep::
 
     [sweep]
     name = "rules"              # the dataset is <results>/rules/ (default: the file's stem)
-    base = "../paper.toml"      # config file, relative to this file (default: the paper's defaults)
+    base = "../paper.toml"      # config file, relative to this file (default: the scenario's defaults)
     seeds = { start = 0, count = 20 }   # or a list: seeds = [0, 1, 2]
     runs_per_task = 10          # runs per job-array task (default 10)
     [set]                       # fixed changes to the base: any config keys
@@ -13,39 +13,72 @@ A sweep file is TOML (``configs/sweeps/``)::
     rule = ["least_confident", "most_confident", "random"]
     tau_minutes = [15, 20, 25, 30, 35, 40]
 
+and an energy-replenishment one (``configs/sweeps/replenishment-fig10.toml``)::
+
+    [sweep]
+    name = "replenishment-fig10"
+    scenario = "replenishment"  # or a base config that names it; default: "delivery"
+    [set]
+    trials = 50                 # a run holds all the trials of its configuration
+    ticks = 6000
+    [[grid]]                    # several products: the runs are their union, in file order
+    strategy = ["fixed"]
+    work_ratio = [0.1, 0.25, 0.5, 1.0]
+    [[grid]]
+    strategy = ["mobile"]
+    n_chargers = [6]
+    work_ratio = [0.1, 0.25, 0.5, 1.0]
+
+The scenario (:mod:`dronefleet.scenarios`) is the one the base config names, or ``[sweep]
+scenario``, or delivery; both given must agree. Everything scenario-specific comes through
+its contract: the keys, their types and validation (``resolve_key``, ``replace``), the seed
+key, the tables, ``simulate``, ``read_config`` and when a done run is outdated.
+
 Keys in ``[set]`` and ``[grid]`` are ``section.key`` or bare key names, as with
 ``dronefleet run --set``. :func:`load_sweep` builds (and so validates) the config of
 every run before anything runs; any problem is a :class:`SweepError` naming the key.
 
-The grid's keys are taken in one canonical order, sorted by parameter name, whatever
-their order in the file: two files that differ only in the order of their ``[grid]`` keys
-are the same sweep (same runs, same tasks, same partition layout), so one dataset never
-gets two layouts (glob readers would see each run twice). Runs are enumerated in one fixed
-order: the grid's product in that canonical key order (the last key varies fastest), seeds
-innermost. Task ``k`` of a job array (0-based) holds runs
-``[k * runs_per_task, (k + 1) * runs_per_task)``.
+Seeds: ``[sweep] seeds`` sets the scenario's seed key, one run per value. A delivery run is
+one replicate, its ``seed``, and a delivery sweep must list its seeds. A replenishment run
+holds all its ``trials`` (trial k uses seed 876 k), so its seed key is ``first_trial`` and
+seeds are optional: without them each configuration is one run of the base's trials
+(1..trials); ``seeds = [1, 51]`` with ``trials = 50`` runs trials 1-100 in two runs per
+configuration. Seeds whose runs would hold a trial twice are refused.
+
+``[grid]`` is one table of lists: the runs are their product. Its keys are taken in one
+canonical order, sorted by name, whatever their order in the file: two files that differ
+only in the order of their ``[grid]`` keys are the same sweep (same runs, same tasks). ``[[grid]]``
+(an array of tables) gives several products: the runs are their union, table after table
+in file order, each product with its keys in the file's order (the first varies slowest),
+so the author's order is the run order. A configuration given twice is refused. Runs are
+enumerated in that order, the last key varying fastest and seeds innermost. Task ``k`` of a
+job array (0-based) holds runs ``[k * runs_per_task, (k + 1) * runs_per_task)``.
 
 The dataset of a sweep, under ``<results>/<name>/``::
 
-    <table>/<key>=<value>/.../seed=<N>/part-0.parquet   one file per run and table
+    <table>/<key>=<value>/.../<seed key>=<N>/part-0.parquet   one file per run and table
     _failed/<run id>.json                               runs that raised or whose worker died, with the error
     _layout.json                                        the partition keys: a sweep of other keys is refused
-    collected.parquet                                   `sweep collect`: one row per run
+    collected.parquet                                   `sweep collect`: each run's summary rows
     <name>.sbatch, _logs/                               `sweep plan`: job-array script, its logs
 
-``<table>`` is each of ``orders, attempts, fleet, timeseries, summary``, so every table is
-its own hive dataset that pandas, pyarrow and DuckDB read as one table. The partition keys
-are the grid's parameter names (bare, sorted by name), then ``seed``; values are ``str(value)`` of the
-config's value (``15.0``, ``3``, ``random``), percent-encoded as hive readers expect. A
-file holds no column named like a partition key (only ``summary`` repeats config values:
-they come back from the path), because readers refuse a column that is both. Directories
-starting with ``_`` are skipped by dataset readers.
+``<table>`` is each of the scenario's tables (delivery: ``orders, attempts, fleet,
+timeseries, summary``; replenishment: ``summary``, one row per trial, and ``timeseries``),
+so every table is its own hive dataset that pandas, pyarrow and DuckDB read as one table.
+The partition keys are the grid's parameter names (bare, sorted by name; with ``[[grid]]``
+the keys of any of its tables), then the seed key (``seed``, ``first_trial``); values are
+``str(value)`` of the config's value (``15.0``, ``3``, ``random``), percent-encoded as hive
+readers expect, so one layout holds every run of a ``[[grid]]`` union (a key that a table
+does not name has the run's value from the base or ``[set]``). A file holds no column named
+like a partition key (only delivery's ``summary`` repeats config values: they come back from
+the path), because readers refuse a column that is both. Directories starting with ``_`` are
+skipped by dataset readers.
 
 A run is done when its ``summary`` file (written last, atomically, like every file) exists
-and carries the run's config (and is newer than the run's ``fleet_file``, if any: see
-:func:`state`): a sweep started again skips done runs and redoes the others,
-replacing what an interrupted attempt wrote. (A kill in the middle of a write can leave a
-hidden ``.part-0.parquet.<pid>.tmp``, which readers ignore.)
+and carries the run's config, and the scenario does not find it outdated (delivery: its
+``fleet_file`` written again since; see :func:`state`): a sweep started again skips done runs
+and redoes the others, replacing what an interrupted attempt wrote. (A kill in the middle of
+a write can leave a hidden ``.part-0.parquet.<pid>.tmp``, which readers ignore.)
 """
 
 from __future__ import annotations
@@ -60,13 +93,15 @@ import sys
 import time
 import traceback
 from contextlib import suppress
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 from urllib.parse import quote
 
-from .config import (PARAMETERS, Config, ConfigError, default_config, load_config, read_toml, replace,
-                     resolve_key)
+from . import scenarios
+from .config import SCENARIO_KEY, ConfigError, read_toml
 from .outputs import OutputError, probe_folders
+from .scenarios import Scenario
 
 #: Environment variables that give a job-array task's index, with the index of the
 #: scheduler's first task: SGE and LSF arrays start at 1, so their task k is index k + 1.
@@ -77,7 +112,7 @@ TASK_VARIABLES = (("SLURM_ARRAY_TASK_ID", 0), ("PBS_ARRAY_INDEX", 0), ("SGE_TASK
 MAX_RUNS = 100_000
 
 _SECTIONS = ("sweep", "set", "grid")
-_SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task")
+_SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task", SCENARIO_KEY)
 _SEED_RANGE_KEYS = ("start", "count")
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 #: A Dask scheduler address: [protocol://]host:port (Dask's default protocol is tcp), host a
@@ -93,15 +128,20 @@ class SweepError(ConfigError):
 
 @dataclass(frozen=True)
 class Run:
-    """One run of a sweep: its resolved config and the partition keys that place it."""
+    """One run of a sweep: its resolved config, the partition keys that place it, its scenario."""
 
-    config: Config
-    keys: tuple[str, ...]   # the grid's parameter names (sorted), then "seed"
+    config: Any
+    keys: tuple[str, ...]   # the grid's parameter names (sorted), then the scenario's seed key
+    scenario: Scenario
+
+    def value(self, key: str):
+        """The run's value of config key ``key``."""
+        return self.scenario.value(self.config, key)
 
     @property
     def partition(self) -> str:
         """Hive path of the run, e.g. ``rule=random/tau_minutes=15.0/seed=3``."""
-        return "/".join(f"{key}={quote(str(getattr(self.config, key)), safe='')}" for key in self.keys)
+        return "/".join(f"{key}={quote(str(self.value(key)), safe='')}" for key in self.keys)
 
     @property
     def id(self) -> str:
@@ -118,11 +158,13 @@ class Run:
 
 @dataclass(frozen=True)
 class Sweep:
-    """A sweep file, read and validated: its grid, seeds and every run's config."""
+    """A sweep file, read and validated: its scenario, grid, seeds and every run's config."""
 
     path: Path                        # the sweep file, absolute
     name: str
-    grid: dict[str, tuple]            # parameter name (sorted) -> values, as the config holds them
+    scenario: Scenario
+    products: tuple[dict[str, tuple], ...]  # each [[grid]] table (or the [grid]): key -> values, in run order
+    grid: dict[str, tuple]            # parameter name (sorted) -> every value it takes, as the config holds them
     seeds: tuple[int, ...]
     runs_per_task: int
     runs: tuple[Run, ...]             # in task order
@@ -140,9 +182,19 @@ class Sweep:
         return self.runs[k * self.runs_per_task:(k + 1) * self.runs_per_task]
 
     def describe(self) -> str:
-        """``3 rule x 6 tau_minutes x 20 seeds = 360 runs``."""
-        factors = [f"{len(values)} {key}" for key, values in self.grid.items()] + [f"{len(self.seeds)} seeds"]
-        return f"{' x '.join(factors)} = {len(self.runs)} runs"
+        """``3 rule x 6 tau_minutes x 20 seeds = 360 runs``; with ``[[grid]]``, the products summed:
+        ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown)."""
+        return f"{_factors(self.products, len(self.seeds))} = {len(self.runs)} runs"
+
+
+def _factors(products, n_seeds: int) -> str:
+    """``3 rule x 6 tau_minutes x 20 seeds``, or ``(1 point + 7 n_chargers x 5 charger_capacity_factor) x 1 seed``."""
+    seeds = f"{n_seeds} seed{'s' if n_seeds != 1 else ''}"
+    if len(products) == 1:
+        return " x ".join([*(f"{len(values)} {key}" for key, values in products[0].items()), seeds])
+    terms = [" x ".join(f"{len(values)} {key}" for key, values in product.items() if len(values) > 1) or "1 point"
+             for product in products]
+    return f"({' + '.join(terms)}) x {seeds}"
 
 
 # --------------------------------------------------------------------------- reading a sweep file
@@ -154,8 +206,8 @@ def _check_names(table: dict, allowed: tuple[str, ...], where: str) -> None:
             raise SweepError(f"{where}: unknown key {key!r}. Allowed: {', '.join(allowed)}")
 
 
-def _parameters(table, where: str) -> dict:
-    """The entries of [set] or [grid] by parameter name; keys are ``section.key`` or bare.
+def _parameters(table, scenario: Scenario, where: str) -> dict:
+    """The entries of [set] or a grid table by parameter name; keys are ``section.key`` or bare.
 
     TOML reads ``auction.rule = ...`` as a table ``auction`` holding ``rule``: one level of
     nesting is a section.
@@ -167,11 +219,12 @@ def _parameters(table, where: str) -> dict:
         entries = [(f"{key}.{k}", v) for k, v in value.items()] if isinstance(value, dict) else [(key, value)]
         for text, v in entries:
             try:
-                name = resolve_key(text)
+                name = scenario.resolve_key(text)
             except ConfigError as error:
                 raise SweepError(f"{where}: {error}", error.keys) from None
-            if name == "seed":
-                raise SweepError(f"{where}: seed cannot be set here: the seeds are [sweep] seeds", ["seed"])
+            if name == scenario.seed_key:
+                raise SweepError(f"{where}: {name} cannot be set here: it is the seed key, given by [sweep] seeds",
+                                 [name])
             if name in out:
                 raise SweepError(f"{where}: {name} is given twice", [name])
             out[name] = v
@@ -183,28 +236,41 @@ def _repeated(values: list):
     return next((v for i, v in enumerate(values) if v in values[:i]), None)
 
 
-def _grid(table, where: str) -> dict[str, list]:
-    grid = _parameters(table, where)
-    if not grid:
-        raise SweepError(f"{where} is empty: a sweep needs at least one key with a list of values "
-                         "(to sweep seeds only, give one value: rule = [\"least_confident\"])")
-    for name, values in grid.items():
-        if PARAMETERS[name].type is tuple:
-            raise SweepError(f"{where}: {name} holds a list of numbers and cannot be a grid key "
-                             "(a partition value is one number or string); set it in [set] or the base",
-                             [name])
-        if not isinstance(values, list):
-            raise SweepError(f"{where}: {name} must be a list of values, got {values!r} "
-                             "(a fixed value goes in [set])", [name])
-        if not values:
-            raise SweepError(f"{where}: {name} is an empty list: it would make no runs", [name])
-        if (value := _repeated(values)) is not None:
-            raise SweepError(f"{where}: {name} lists {value!r} more than once", [name])
-    return dict(sorted(grid.items()))  # the canonical key order: one partition layout per dataset
+def _products(grid, scenario: Scenario, where: str) -> list[tuple[str, dict[str, list]]]:
+    """``[grid]`` (one table) or ``[[grid]]`` (an array of tables) -> ``(label, {key: values})``
+    per product, keys in run order: sorted for ``[grid]``, as written for each ``[[grid]]`` table."""
+    if isinstance(grid, list):
+        tables = [(f"[[grid]] {n}", table, False) for n, table in enumerate(grid, 1)]
+    else:
+        tables = [("[grid]", {} if grid is None else grid, True)]
+    empty = ("is empty: a sweep needs at least one key with a list of values "
+             "(to sweep seeds only, give one value: rule = [\"least_confident\"])")
+    if not tables:
+        raise SweepError(f"{where}: [[grid]] {empty}")
+    products = []
+    for label, table, canonical in tables:
+        product = _parameters(table, scenario, f"{where}: {label}")
+        if not product:
+            raise SweepError(f"{where}: {label} {empty}")
+        for name, values in product.items():
+            if type(scenario.defaults[name]) is tuple:
+                raise SweepError(f"{where}: {label}: {name} holds a list of numbers and cannot be a grid key "
+                                 "(a partition value is one number or string); set it in [set] or the base",
+                                 [name])
+            if not isinstance(values, list):
+                raise SweepError(f"{where}: {label}: {name} must be a list of values, got {values!r} "
+                                 "(a fixed value goes in [set])", [name])
+            if not values:
+                raise SweepError(f"{where}: {label}: {name} is an empty list: it would make no runs", [name])
+            if (value := _repeated(values)) is not None:
+                raise SweepError(f"{where}: {label}: {name} lists {value!r} more than once", [name])
+        # [grid]'s canonical key order: a file's key order changes neither its runs nor its tasks
+        products.append((label, dict(sorted(product.items())) if canonical else product))
+    return products
 
 
 def _seeds(value, where: str) -> tuple:
-    """``[0, 1, 2]`` or ``{ start = 0, count = 20 }`` -> the seeds (each then checked by Config)."""
+    """``[0, 1, 2]`` or ``{ start = 0, count = 20 }`` -> the seeds (each then checked by the config)."""
     if isinstance(value, dict):
         _check_names(value, _SEED_RANGE_KEYS, where)
         start, count = value.get("start", 0), value.get("count")
@@ -223,6 +289,37 @@ def _seeds(value, where: str) -> tuple:
                      f"(seeds = {{ start = 0, count = 20 }}), got {value!r}", ["seed"])
 
 
+def _scenario(head: dict, base: Path | None, path: Path) -> Scenario:
+    """The sweep's scenario: the one its base config names, or ``[sweep] scenario``, or delivery."""
+    named = head.get(SCENARIO_KEY)
+    try:
+        scenario = None if named is None else scenarios.get(named, f"{path}: [sweep] ")
+    except ConfigError as error:
+        raise SweepError(str(error), error.keys) from None
+    if base is None:
+        return scenario or scenarios.SCENARIOS["delivery"]
+    try:
+        of_base = scenarios.scenario_of(base)
+    except ConfigError as error:
+        raise SweepError(f"{path}: [sweep] base: {error}", error.keys) from None
+    if scenario is not None and scenario is not of_base:
+        raise SweepError(f"{path}: [sweep] scenario = {named!r}, but the base {str(base)!r} is a {of_base.name} "
+                         "config: name one scenario", [SCENARIO_KEY])
+    return of_base
+
+
+def _check_replicates(scenario: Scenario, runs: list[Run], where: str) -> None:
+    """Refuse seeds whose runs (of one configuration) would hold a replicate twice."""
+    held = sorted(((scenario.replicates(run.config), run) for run in runs), key=lambda pair: pair[0].start)
+    for (first, a), (second, b) in zip(held, held[1:]):
+        if second.start < first.stop:
+            key, last = scenario.seed_key, min(first.stop, second.stop) - 1
+            shared = str(last) if last == second.start else f"{second.start}-{last}"
+            raise SweepError(f"{where}: {key} = {a.value(key)} and {key} = {b.value(key)} give runs that both hold "
+                             f"replicates {shared} (each run holds {len(first)}): space the seeds at least that "
+                             "far apart", [key])
+
+
 def load_sweep(path, changes=None, seeds=None) -> Sweep:
     """Read and validate a sweep file: every run's config is built here, before any run.
 
@@ -233,8 +330,9 @@ def load_sweep(path, changes=None, seeds=None) -> Sweep:
     ------
     SweepError
         Unreadable file, unknown section or key (the message lists the allowed ones), an
-        empty or missing grid, a value given twice, or any config value that the config
-        refuses (the message names the key, the grid point and what is allowed).
+        unknown scenario or one the base contradicts, an empty or missing grid, a value given
+        twice, a configuration given twice, seeds whose runs overlap, or any config value that
+        the scenario refuses (the message names the key, the grid point and what is allowed).
     """
     path = Path(path)
     try:
@@ -257,45 +355,64 @@ def load_sweep(path, changes=None, seeds=None) -> Sweep:
     base = head.get("base")
     if base is not None and not isinstance(base, str):
         raise SweepError(f"{path}: [sweep] base must be a path (string), got {base!r}")
+    base = None if base is None else path.parent / base
+    scenario = _scenario(head, base, path)
+    key = scenario.seed_key
 
-    fixed = _parameters(doc.get("set", {}), f"{path}: [set]")
-    fixed.update(_parameters(dict(changes or {}), f"{path}: changes"))
-    grid = _grid(doc.get("grid", {}), f"{path}: [grid]")
-    both = [key for key in grid if key in fixed]
-    if both:
-        raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in [grid]", both)
-    seeds = _seeds(head.get("seeds") if seeds is None else list(seeds), f"{path}: [sweep] seeds")
-    n_runs = math.prod(len(values) for values in grid.values()) * len(seeds)
+    fixed = _parameters(doc.get("set", {}), scenario, f"{path}: [set]")
+    fixed.update(_parameters(dict(changes or {}), scenario, f"{path}: changes"))
+    products = _products(doc.get("grid"), scenario, path)
+    for label, product in products:
+        both = [k for k in product if k in fixed]
+        if both:
+            raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in {label}", both)
+    listed = head.get("seeds") if seeds is None else list(seeds)
+    # without seeds (where the scenario allows it), one run per configuration at the base's seed value
+    seeds = None if listed is None and not scenario.seeds_required else _seeds(listed, f"{path}: [sweep] seeds")
+    per_point = 1 if seeds is None else len(seeds)
+    n_runs = sum(math.prod(len(values) for values in product.values()) for _, product in products) * per_point
     if n_runs > MAX_RUNS:
-        factors = " x ".join([*(f"{len(values)} {key}" for key, values in grid.items()), f"{len(seeds)} seeds"])
+        factors = _factors([product for _, product in products], per_point)
         raise SweepError(f"{path}: {factors} = {n_runs:,} runs; a sweep may hold at most {MAX_RUNS:,} runs: "
                          "split it into several sweeps (another [sweep] name each)")
 
     try:
-        config = default_config() if base is None else load_config(path.parent / base)
+        config = scenario.load(base)
     except ConfigError as error:
         raise SweepError(f"{path}: [sweep] base: {error}", error.keys) from None
     try:
-        config = replace(config, **fixed)
+        config = scenario.replace(config, fixed)
     except ConfigError as error:
         raise SweepError(f"{path}: [set]: {error}", error.keys) from None
+    if seeds is None:
+        seeds = (scenario.value(config, key),)
     for seed in seeds:
         try:
-            replace(config, seed=seed)
+            scenario.replace(config, {key: seed})
         except ConfigError as error:
             raise SweepError(f"{path}: [sweep] seeds: {error}", error.keys) from None
-    keys = (*grid, "seed")
-    runs = []
-    for point in itertools.product(*grid.values()):
-        changes = dict(zip(grid, point))
-        try:
-            at_point = replace(config, **changes)
-        except ConfigError as error:
-            where = ", ".join(f"{k} = {v!r}" for k, v in changes.items())
-            raise SweepError(f"{path}: [grid] at {where}: {error}", error.keys) from None
-        runs.extend(Run(replace(at_point, seed=seed), keys) for seed in seeds)
-    values = {key: tuple(dict.fromkeys(getattr(run.config, key) for run in runs)) for key in grid}
-    return Sweep(path.absolute(), name, values, seeds, runs_per_task, tuple(runs), text)
+    keys = (*sorted({k for _, product in products for k in product}), key)
+    runs, given = [], {}   # given: each configuration -> the grid point that gave it first
+    for label, product in products:
+        for point in itertools.product(*product.values()):
+            changes = dict(zip(product, point))
+            where = f"{label} at {', '.join(f'{k} = {v!r}' for k, v in changes.items())}"
+            try:
+                at_point = scenario.replace(config, changes)
+            except ConfigError as error:
+                raise SweepError(f"{path}: {where}: {error}", error.keys) from None
+            if at_point in given:
+                raise SweepError(f"{path}: {where} is the configuration of {given[at_point]}: "
+                                 "a sweep runs each configuration once", list(changes))
+            given[at_point] = where
+            point_runs = [Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds]
+            if len(point_runs) > 1 and scenario.replicates(at_point) is not None:
+                _check_replicates(scenario, point_runs, f"{path}: [sweep] seeds at {where}")
+            runs.extend(point_runs)
+    values = {k: tuple(dict.fromkeys(run.value(k) for run in runs)) for k in keys[:-1]}
+    return Sweep(path.absolute(), name, scenario, tuple({k: tuple(v) for k, v in product.items()}
+                                                       for _, product in products),
+                 values, seeds, runs_per_task, tuple(runs), text)
 
 
 # --------------------------------------------------------------------------- one run
@@ -306,17 +423,17 @@ def execute(run: Run, out: Path) -> str | None:
 
     A run that raises is recorded in ``_failed/<run id>.json`` (error, traceback, config)
     and its error returned as one line; a run that succeeds removes any such record and
-    returns None. Runs in worker processes, so it imports the engine here.
+    returns None. Runs in worker processes: the scenario imports its simulator there.
     """
-    from .delivery.records import tables
     from .records import write_table
-    from .delivery.simulation import simulate
 
     try:
+        tables = run.scenario.simulate(run.config)
         # Files of an interrupted attempt are replaced, not deleted first: two processes that
         # happen to run the same run (a task submitted twice) then write the same bytes safely.
-        for table, data in tables(simulate(run.config)).items():  # summary last
-            path = run.path(out, table)
+        # The summary last: its file marks the run done.
+        for table in sorted(tables, key=lambda name: name == "summary"):
+            data, path = tables[table], run.path(out, table)
             path.parent.mkdir(parents=True, exist_ok=True)
             write_table(data.drop_columns([k for k in run.keys if k in data.column_names]), path, run.config)
     except Exception as error:  # recorded, and the sweep goes on with the other runs
@@ -354,35 +471,30 @@ def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
     return error
 
 
-def _config_difference(a: Config, b: Config) -> str:
-    return ", ".join(f"{f.name} {getattr(a, f.name)!r} vs {getattr(b, f.name)!r}"
-                     for f in fields(Config) if getattr(a, f.name) != getattr(b, f.name))
+def _config_difference(scenario: Scenario, a, b) -> str:
+    """``n_uavs 10 vs 11``: the keys whose values differ between configs ``a`` and ``b``."""
+    values = [(key, scenario.value(a, key), scenario.value(b, key)) for key in scenario.schema]
+    return ", ".join(f"{key} {x!r} vs {y!r}" for key, x, y in values if x != y)
 
 
 def state(run: Run, out: Path) -> str:
     """``done``, ``failed`` or ``missing``: where ``run`` stands in the dataset ``out``.
 
-    A run that starts from a saved fleet (``fleet_file``, ``{seed}`` replaced) is not done
-    once that file is newer than the run's summary: the fleet was written again since (the
-    sweep that made it rerun after a fix, say), so the run's results come from a fleet
-    that is gone, and a rerun replaces them rather than leave old and new fleets mixed in
-    one sweep. (A fleet file that no longer exists leaves the run done: nothing says it is
-    stale.)
+    A run whose summary exists is not done if its scenario finds it outdated (delivery: it
+    starts from a saved fleet written again after the run, see
+    :func:`dronefleet.delivery.scenario.outdated`): a rerun replaces its results.
 
     Raises SweepError if the run's summary was made with another config (the sweep file
     changed since): new results would silently mix with old ones.
     """
-    from .delivery.fleet import seeded_path
-    from .delivery.records import read_config
-
     summary = run.path(out, "summary")
     if summary.exists():
-        found = read_config(summary)
+        found = run.scenario.read_config(summary)
         if found != run.config:
-            raise SweepError(f"{summary} was made with another config ({_config_difference(found, run.config)}); "
+            difference = _config_difference(run.scenario, found, run.config)
+            raise SweepError(f"{summary} was made with another config ({difference}); "
                              f"write to another --results root, or remove {out} to start again")
-        fleet = seeded_path(run.config.fleet_file, run.config.seed) if run.config.fleet_file else None
-        if fleet is None or not fleet.exists() or fleet.stat().st_mtime_ns <= summary.stat().st_mtime_ns:
+        if not run.scenario.outdated(run.config, summary):
             return "done"
     return "failed" if run.failure_path(out).exists() else "missing"
 
@@ -393,11 +505,10 @@ def state(run: Run, out: Path) -> str:
 LAYOUT_FILE = "_layout.json"
 
 
-def _found_layout(out: Path) -> tuple[str, ...] | None:
+def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[str, ...] | None:
     """The partition keys of the dataset ``out``: from its :data:`LAYOUT_FILE` or, in a dataset
-    written before that file existed, from its partition directories; None if it holds none."""
-    from .delivery.records import TABLES
-
+    written before that file existed, from the partition directories of its ``tables``; None if
+    it holds none."""
     record = out / LAYOUT_FILE
     try:
         if record.exists():
@@ -405,7 +516,7 @@ def _found_layout(out: Path) -> tuple[str, ...] | None:
             if not (isinstance(keys, list) and keys and all(isinstance(key, str) for key in keys)):
                 raise ValueError("keys is not a list of names")
             return tuple(keys)
-        for table in TABLES:
+        for table in tables:
             keys, folder = [], out / table
             while folder.is_dir():  # down the first partition directory of each level
                 folder = next((path for path in sorted(folder.iterdir()) if path.is_dir() and "=" in path.name
@@ -429,7 +540,7 @@ def check_layout(sweep: Sweep, out: Path) -> None:
     runs twice (DuckDB refuses it: "Hive partition mismatch").
     """
     keys = sweep.runs[0].keys
-    found = _found_layout(out)
+    found = _found_layout(out, sweep.scenario.tables)
     if found is not None and found != keys:
         raise SweepError(f"{out} holds a dataset partitioned by {'/'.join(found)}; this sweep partitions by "
                          f"{'/'.join(keys)}: use another [sweep] name or --results")
@@ -647,8 +758,17 @@ def _done_runs(sweep: Sweep, out: Path) -> list[Run]:
     return done
 
 
+def _partition_schema(sweep: Sweep):
+    """The partition keys of ``sweep`` as a pyarrow schema, each with its config type."""
+    import pyarrow as pa
+
+    types = {float: pa.float64(), int: pa.int64(), str: pa.string()}
+    return pa.schema([(key, types[type(sweep.scenario.defaults[key])]) for key in sweep.runs[0].keys])
+
+
 def collect(sweep: Sweep, out: Path):
-    """One row per done run, in run order: its partition values (grid keys, seed), then its summary.
+    """The summary rows of every done run, in run order: its partition values (grid keys, seed
+    key), then its summary (delivery: one row per run; replenishment: one row per trial).
 
     Written atomically to ``out/collected.parquet``, with the sweep file in the metadata
     (``dronefleet.sweep``). Returns ``(table, the runs not done)``.
@@ -660,11 +780,12 @@ def collect(sweep: Sweep, out: Path):
     from .records import write_atomic
 
     done = _done_runs(sweep, out)
+    schema = _partition_schema(sweep)
     rows = []
     for run in done:
         summary = pq.read_table(run.path(out, "summary"))
-        rows.append(pa.table({**{key: [getattr(run.config, key)] for key in run.keys},
-                              **dict(zip(summary.column_names, summary.columns))}))
+        partition = {key: pa.array([run.value(key)] * summary.num_rows, schema.field(key).type) for key in run.keys}
+        rows.append(pa.table({**partition, **dict(zip(summary.column_names, summary.columns))}))
     table = stamp(pa.concat_tables(rows).replace_schema_metadata({b"dronefleet.sweep": sweep.text}))
     write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
     finished = set(done)
@@ -683,15 +804,13 @@ def dataset(sweep: Sweep, out, table: str):
     (Read without a schema, hive partition values come back as strings or int32:
     ``tau_minutes=15.0`` as the string ``"15.0"``.)
     """
-    import pyarrow as pa
     import pyarrow.dataset as ds
 
     out = Path(out)
     done = _done_runs(sweep, out)
-    types = {float: pa.float64(), int: pa.int64(), str: pa.string()}
-    schema = pa.schema([(key, types[PARAMETERS[key].type]) for key in sweep.runs[0].keys])
     return ds.dataset([str(run.path(out, table)) for run in done], format="parquet",
-                      partitioning=ds.partitioning(schema, flavor="hive"), partition_base_dir=str(out / table))
+                      partitioning=ds.partitioning(_partition_schema(sweep), flavor="hive"),
+                      partition_base_dir=str(out / table))
 
 
 # --------------------------------------------------------------------------- the commands (see cli.py)
@@ -780,11 +899,11 @@ def status_command(args) -> int:
 
 
 def collect_command(args) -> int:
-    """``dronefleet sweep collect``: the summary table of the done runs, as parquet."""
+    """``dronefleet sweep collect``: the summary rows of the done runs, as parquet."""
     sweep, out = _open(args)
     table, not_done = collect(sweep, out)
-    print(f"sweep {sweep.name}: {table.num_rows} of {len(sweep.runs)} runs in {out / 'collected.parquet'} "
-          f"({table.num_columns} columns)")
+    print(f"sweep {sweep.name}: {len(sweep.runs) - len(not_done)} of {len(sweep.runs)} runs in "
+          f"{out / 'collected.parquet'} ({table.num_rows} rows, {table.num_columns} columns)")
     if not_done:
         print(f"  {len(not_done)} runs are not done (see sweep status); they have no row", file=sys.stderr)
     return 1 if not_done else 0

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from dronefleet import config as cfg
+from dronefleet.delivery import config as cfg
 from dronefleet.delivery import auction, simulation
 from dronefleet.delivery.orders import Orders
 

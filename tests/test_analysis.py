@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from conftest import WEEK
-from dronefleet import config as cfg
+from dronefleet.delivery import config as cfg
 from dronefleet.delivery import analysis, auction
 from dronefleet.delivery.metrics import by_arrival_week
 from dronefleet.delivery.policy import decision

@@ -1,4 +1,5 @@
-"""Tests of dronefleet.config: files, overrides, validation messages, JSON."""
+"""Tests of the delivery config (dronefleet.delivery.config on the shared dronefleet.config): files,
+overrides, validation messages, JSON."""
 
 import dataclasses
 import json
@@ -8,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from dronefleet.config import (
+from dronefleet.config import ConfigError
+from dronefleet.delivery.config import (
     SECTIONS,
     Config,
-    ConfigError,
     config_from_dict,
     default_config,
     load_config,
@@ -437,7 +438,7 @@ _SIZE_KNOBS = {
 
 @pytest.mark.parametrize("term", sorted(_SIZE_KNOBS))
 def test_run_size_limits_refuse_just_above_and_accept_at_the_limit(term):
-    from dronefleet.config import RUN_LIMITS, run_size
+    from dronefleet.delivery.config import RUN_LIMITS, run_size
 
     limit = RUN_LIMITS[term]
     at = replace(default_config(), **{**_QUIET, **_SIZE_KNOBS[term](limit)})

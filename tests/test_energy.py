@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import K, power, rate
-from dronefleet import config as cfg
+from dronefleet.delivery import config as cfg
 from dronefleet.delivery.energy import (
     LOSS_TOLERANCE,
     capable,

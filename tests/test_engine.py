@@ -19,7 +19,7 @@ from conftest import (
     ALWAYS, DELTA, K, MU, NEVER, SHORT_ONLY, SIGMA, SPEED, WEEK, charged, next_grid, rate, run_state,
     scenario, scenario_config, x_std,
 )
-from dronefleet import config as cfg
+from dronefleet.delivery import config as cfg
 from dronefleet.delivery import engine, simulation, records as delivery_records
 from dronefleet.supervisor import BUILTIN_CONTROLLER, SupervisorError
 

@@ -23,7 +23,7 @@ import pytest
 import dronefleet
 from dronefleet import cli, scenarios
 from dronefleet.delivery import simulation
-from dronefleet.config import RUN_LIMITS, default_config, load_config, replace, run_size
+from dronefleet.delivery.config import RUN_LIMITS, default_config, load_config, replace, run_size
 from dronefleet.delivery.fleet import COLUMNS, load_fleet
 from dronefleet.records import write_table
 from dronefleet.supervisor import (BUILTIN_CONTROLLER, MAX_FILE_BYTES, SupervisorFileError,

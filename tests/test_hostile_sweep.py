@@ -158,6 +158,56 @@ def test_hostile_sweep_files_are_refused_before_any_run(tmp_path, capsys, no_arr
     refused(capsys, ["sweep", "run", str(path), "--results", str(results)], fragment, results)
 
 
+REPLENISHMENT = """[sweep]
+scenario = "replenishment"
+[set]
+trials = 2
+ticks = 200
+[[grid]]
+strategy = ["mobile"]
+n_chargers = [1, 2]
+"""
+
+
+@pytest.mark.parametrize("text, fragment", [
+    (REPLENISHMENT + "transfer_loss = [0.0, -0.1]\n",
+     "[[grid]] 1 at strategy = 'mobile', n_chargers = 1, transfer_loss = -0.1: transfer_loss = -0.1 is not "
+     "allowed: must be in [0, 1)"),
+    (REPLENISHMENT + "transfer_loss = [1.0]\n", "transfer_loss = 1.0 is not allowed: must be in [0, 1)"),
+    (REPLENISHMENT + "work_rate = [1.0]\n", "[[grid]] 1: unknown key 'work_rate' (did you mean 'work_ratio'?). "
+                                            "Allowed keys: run.trials"),
+    (REPLENISHMENT + "robots.work_ratio = [1.0]\n", "unknown key 'robots.work_ratio'"),
+    (REPLENISHMENT + "[[grid]]\nstrategy = ['fixed']\n",
+     "[[grid]] 2 at strategy = 'fixed': n_chargers = 6 is not allowed: must be 0 with strategy \"fixed\""),
+    (REPLENISHMENT + "[[grid]]\nstrategy = ['mobile']\nn_chargers = [2]\n",
+     "[[grid]] 2 at strategy = 'mobile', n_chargers = 2 is the configuration of [[grid]] 1 at strategy = 'mobile', "
+     "n_chargers = 2"),
+    (REPLENISHMENT.replace("ticks = 200", "ticks = 2.5"), "[set]: run.ticks must be an integer, got float 2.5"),
+    (REPLENISHMENT.replace("trials = 2", "trials = 0"), "[set]: trials = 0 is not allowed: must be >= 1"),
+    (REPLENISHMENT.replace("trials = 2", "first_trial = 3"),
+     "[set]: first_trial cannot be set here: it is the seed key, given by [sweep] seeds"),
+    (REPLENISHMENT.replace("[set]", "seeds = [0]\n[set]"), "[sweep] seeds: run.first_trial = 0 is out of range"),
+    (REPLENISHMENT.replace("[set]", "seeds = [1, 2]\n[set]"), "first_trial = 1 and first_trial = 2 give runs that "
+                                                               "both hold replicates 2 (each run holds 2)"),
+    (REPLENISHMENT.replace('"replenishment"', '"replenish"'),
+     "[sweep] unknown scenario 'replenish' (did you mean 'replenishment'?); registered scenarios: delivery, "
+     "replenishment"),
+    (REPLENISHMENT.replace("[sweep]\n", "[sweep]\nbase = '../../configs/paper.toml'\n"),
+     "[sweep] scenario = 'replenishment', but the base"),
+])
+def test_hostile_replenishment_sweep_files_are_refused_before_any_run(tmp_path, capsys, monkeypatch, no_array,
+                                                                     text, fragment):
+    from dronefleet.replenishment import scenario
+
+    monkeypatch.setattr(scenario, "simulate", lambda config: pytest.fail("a run was simulated"))
+    path = tmp_path / "hostile.toml"
+    path.write_text(text.replace("../../configs/paper.toml", str(ROOT / "configs" / "paper.toml")))
+    results = tmp_path / "results"
+    results.mkdir()
+    for command in ("run", "plan", "status"):
+        refused(capsys, ["sweep", command, str(path), "--results", str(results)], fragment, results)
+
+
 def test_the_runs_cap_is_a_bound_on_the_runs_of_the_product(monkeypatch):
     monkeypatch.setattr(sw, "MAX_RUNS", 8)       # smoke.toml: 2 rule x 2 tau_minutes x 2 seeds
     assert len(sw.load_sweep(SMOKE).runs) == 8

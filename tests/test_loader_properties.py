@@ -18,8 +18,9 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from dronefleet.config import (PARAMETERS, SECTIONS, Config, ConfigError, config_from_dict, default_config,
-                               load_config, replace)
+from dronefleet.config import ConfigError
+from dronefleet.delivery.config import (PARAMETERS, SECTIONS, Config, config_from_dict, default_config, load_config,
+                                        replace)
 from dronefleet.delivery.fleet import COLUMNS, SavedFleet, load_fleet
 from dronefleet.records import write_table
 from dronefleet.supervisor import BUILTIN_CONTROLLER, Automaton, SupervisorFileError, load_supervisor

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import WEEK, rate
-from dronefleet import config as cfg
+from dronefleet.delivery import config as cfg
 from dronefleet.delivery.metrics import accuracy_points, by_arrival_week, decision_accuracy
 
 C = cfg.default_config()

@@ -9,7 +9,8 @@ import pytest
 
 from conftest import ALWAYS, NEVER, WEEK, rate, run_state, scenario, scenario_config
 from dronefleet.delivery.metrics import run_metrics
-from dronefleet import config as cfg, records
+from dronefleet import records
+from dronefleet.delivery import config as cfg
 from dronefleet.delivery import simulation, records as delivery_records
 
 SCHEMAS = {

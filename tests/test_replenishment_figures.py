@@ -1,4 +1,4 @@
-"""Figures 9-12 of the replenishment study: the grids of REPLENISHMENT.md section 10,
+"""Figures 9-12 of the replenishment study: the grids of REPLENISHMENT.md section 10 (sweep files),
 ``dronefleet reproduce fig09..fig12`` (tables, PNGs, --redraw, --check) and the bounds they draw."""
 
 import importlib
@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dronefleet import cli, reproduce
+from dronefleet import cli, reproduce, sweep
 from dronefleet.replenishment import Params, bounds, experiments, study
 from dronefleet.replenishment import figures as rfigures
 
@@ -21,8 +21,9 @@ FIGURES = experiments.FIGURES
 TINY_TRIALS, TINY_TICKS = 2, 300
 
 
-def grid(figure):
-    return experiments.load_grid(experiments.grid_path(figure))
+def grid(figure, changes=None):
+    """The configurations (Params) of the figure's sweep file, in run order."""
+    return [run.config.params for run in sweep.load_sweep(experiments.grid_path(figure), changes).runs]
 
 
 def points(configs, *columns):
@@ -31,14 +32,14 @@ def points(configs, *columns):
 
 def test_the_grids_are_those_of_section_10():
     grids = {figure: grid(figure) for figure in FIGURES}
-    assert {f: len(g.configs) for f, g in grids.items()} == {"fig09": 36, "fig10": 18, "fig11": 10, "fig12": 11}
+    assert {f: len(g) for f, g in grids.items()} == {"fig09": 36, "fig10": 18, "fig11": 10, "fig12": 11}
     for g in grids.values():
-        assert g.trials == 50 and {p.ticks for p in g.configs} == {6000}
-        assert {p.n_workers for p in g.configs} == {6} and {p.worker_capacity for p in g.configs} == {100.0}
-        assert len(set(g.configs)) == len(g.configs)
-        fixed = [p for p in g.configs if p.strategy == "fixed"]
+        assert {p.trials for p in g} == {50} and {p.ticks for p in g} == {6000}
+        assert {p.n_workers for p in g} == {6} and {p.worker_capacity for p in g} == {100.0}
+        assert len(set(g)) == len(g)
+        fixed = [p for p in g if p.strategy == "fixed"]
         assert all(p.n_chargers == 0 and p.transfer_loss == 0.0 for p in fixed)
-    fig9 = grids["fig09"].configs
+    fig9 = grids["fig09"]
     assert points([p for p in fig9 if p.mobile], "n_chargers", "charger_capacity_factor") == sorted(
         (n, phi) for n in (1, 2, 4, 6, 8, 10, 12) for phi in (1.0, 1.5, 2.0, 4.0, 6.0))
     assert [p.strategy for p in fig9].count("fixed") == 1
@@ -46,7 +47,7 @@ def test_the_grids_are_those_of_section_10():
     r = [0.1, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 10.0]
     k = [0.1, 0.25, 0.5, 0.75, 1.0]
     for figure, column, values in (("fig10", "work_ratio", r), ("fig11", "charge_rate", k)):
-        configs = grids[figure].configs
+        configs = grids[figure]
         for strategy, n_m in (("fixed", 0), ("mobile", 6)):
             mine = [p for p in configs if p.strategy == strategy]
             assert sorted(getattr(p, column) for p in mine) == values
@@ -54,7 +55,7 @@ def test_the_grids_are_those_of_section_10():
         assert all(p.charger_capacity_factor == 2.0 and p.transfer_loss == 0.0 for p in configs)
         other = "charge_rate" if column == "work_ratio" else "work_ratio"
         assert {getattr(p, other) for p in configs} == {1.0}
-    fig12 = grids["fig12"].configs
+    fig12 = grids["fig12"]
     mobile = [p for p in fig12 if p.mobile]
     assert [p.transfer_loss for p in mobile] == [round(0.1 * i, 1) for i in range(10)]
     assert {(p.n_chargers, p.charger_capacity_factor) for p in mobile} == {(6, 2.0)}
@@ -63,13 +64,13 @@ def test_the_grids_are_those_of_section_10():
 
 def test_a_grid_file_with_an_unknown_key_or_a_refused_value_names_it(tmp_path):
     path = tmp_path / "g.toml"
-    path.write_text('[sweep]\ntrials = 2\n[[grid]]\nstrategy = ["mobile"]\nn_chargers = [2]\nwork_rate = [1.0]\n')
-    with pytest.raises(experiments.SweepError, match="unknown key 'work_rate'"):
-        experiments.load_grid(path)
-    path.write_text('[sweep]\ntrials = 2\n[[grid]]\nstrategy = ["mobile"]\nn_chargers = [2]\n'
-                    'transfer_loss = [0.5, 1.0]\n')
-    with pytest.raises(experiments.SweepError, match=r"transfer_loss = 1\.0.*\[0, 1\)"):
-        experiments.load_grid(path)
+    head = '[sweep]\nscenario = "replenishment"\n[set]\ntrials = 2\n[[grid]]\nstrategy = ["mobile"]\nn_chargers = [2]\n'
+    path.write_text(head + 'work_rate = [1.0]\n')
+    with pytest.raises(sweep.SweepError, match="unknown key 'work_rate'"):
+        sweep.load_sweep(path)
+    path.write_text(head + 'transfer_loss = [0.5, 1.0]\n')
+    with pytest.raises(sweep.SweepError, match=r"transfer_loss = 1\.0.*\[0, 1\)"):
+        sweep.load_sweep(path)
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +88,7 @@ def tiny(tmp_path_factory):
 def test_quick_mode_writes_every_trial_and_bound_and_the_png(tiny, figure):
     results, drawn = tiny
     root = results / "quick" / figure
-    configs = grid(figure).configs
+    configs = grid(figure)
     runs = pd.read_parquet(root / "runs.parquet")
     assert len(runs) == len(configs) * TINY_TRIALS
     assert (runs.groupby(list(experiments.CONFIG_COLUMNS)).trial.apply(tuple) == (1, 2)).all()
@@ -181,7 +182,7 @@ def test_the_bound_lines_are_bounds_at_each_grid_point(tiny, figure, tmp_path, m
     with captured_axes(monkeypatch) as kept:
         rfigures.work_and_efficiency(runs, table, tmp_path / "f.png", "t", **curve)
     work_ax, efficiency_ax = kept[0]
-    configs = experiments.load_grid(experiments.grid_path(figure), changes={"ticks": TINY_TICKS}).configs
+    configs = grid(figure, {"ticks": TINY_TICKS})
     for strategy in ("fixed", "mobile"):
         mine = sorted((p for p in configs if p.strategy == strategy), key=lambda p: getattr(p, x))
         expected = [bounds(p) for p in mine]

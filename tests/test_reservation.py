@@ -11,7 +11,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import K, MU, SIGMA, run_state, scenario, scenario_config, x_std
-from dronefleet import cli, config as cfg
+from dronefleet import cli
+from dronefleet.delivery import config as cfg
 from dronefleet.delivery import engine, fleet as fleetfile, simulation, records as delivery_records
 from dronefleet.delivery.metrics import run_metrics
 from dronefleet.delivery.orders import generate_orders

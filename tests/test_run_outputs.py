@@ -26,7 +26,7 @@ import pytest
 import dronefleet
 from dronefleet import cli, provenance, records, reproduce
 from dronefleet.delivery import simulation, records as delivery_records
-from dronefleet.config import default_config, load_config, replace
+from dronefleet.delivery.config import default_config, load_config, replace
 
 SHORT = ["--set", "horizon_weeks=0.05", "--set", "n_uavs=5"]
 

@@ -9,7 +9,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from dronefleet import cli, provenance, records, scenarios
-from dronefleet.config import ConfigError, load_config
+from dronefleet.config import ConfigError
+from dronefleet.delivery.config import load_config
 from dronefleet.replenishment import Params, constant_supply_bounds, fixed_bounds
 
 # A tiny run of each registered scenario (a new scenario must add one): config file text, --set.
@@ -44,6 +45,15 @@ def test_scenario_contract(name, tmp_path, capsys):
     for field in scenario.schema.values():
         assert field.section and field.unit and field.allowed and field.doc
     assert isinstance(scenario.figures, tuple) and "summary" in scenario.tables
+    # what sweeps need: key resolution, validated replacement, values, the seed key
+    defaults = scenario.load(None)
+    assert scenario.seed_key in scenario.schema and isinstance(scenario.seeds_required, bool)
+    for key, field in scenario.schema.items():
+        assert scenario.resolve_key(key) == scenario.resolve_key(f"{field.section}.{key}") == key
+        assert scenario.value(defaults, key) == scenario.defaults[key]
+    assert scenario.replace(defaults, {}) == defaults
+    with pytest.raises(ConfigError):
+        scenario.replace(defaults, {scenario.seed_key: -1})
     # loading: the file names its scenario; defaults with no file or an empty one
     path = _config_file(tmp_path, text)
     assert scenarios.scenario_of(path) is scenario

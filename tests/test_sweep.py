@@ -21,9 +21,9 @@ import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 import pytest
 
-from dronefleet import cli, sweep as sw
+from dronefleet import cli, scenarios, sweep as sw
 from dronefleet.delivery import simulation
-from dronefleet.config import default_config, replace
+from dronefleet.delivery.config import default_config, replace
 from dronefleet.delivery.records import TABLES
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -141,7 +141,7 @@ def test_bad_sweep_files_are_refused_before_any_run(tmp_path, capsys, text, mess
 def test_partition_values_round_trip_through_their_text():
     config = replace(default_config(), fleet_file="fleets/a b,{seed}=1%.parquet", tau_minutes=1e-5, horizon_weeks=0.001,
                      seed=12)
-    run = sw.Run(config, ("fleet_file", "tau_minutes", "n_uavs", "seed"))
+    run = sw.Run(config, ("fleet_file", "tau_minutes", "n_uavs", "seed"), scenarios.get("delivery"))
     assert run.partition == "fleet_file=fleets%2Fa%20b%2C%7Bseed%7D%3D1%25.parquet/tau_minutes=1e-05/n_uavs=25/seed=12"
     assert "/" not in run.id and run.id.count(",") == 3
     for segment, key in zip(run.partition.split("/"), run.keys):

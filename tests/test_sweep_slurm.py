@@ -1,5 +1,6 @@
 """A real SLURM: the job-array script of `sweep plan`, submitted to a one-node cluster on
-this machine, writes the very dataset that a local `sweep run` writes.
+this machine, writes the very dataset that a local `sweep run` writes, for a delivery and a
+replenishment sweep.
 
 Needs Debian's slurm-wlm and munge (`.ci/run` installs them) and root, to start the
 daemons; skipped, saying which is missing, otherwise. ``tests/slurm/cluster.sh`` starts
@@ -18,6 +19,7 @@ import pytest
 
 from dronefleet import cli
 from dronefleet.delivery.records import TABLES
+from dronefleet.scenarios import SCENARIOS
 
 SMOKE = Path(__file__).resolve().parents[1] / "configs" / "sweeps" / "smoke.toml"
 CLUSTER = Path(__file__).resolve().parent / "slurm" / "cluster.sh"
@@ -75,3 +77,47 @@ def test_the_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkey
     assert (on_slurm / "collected.parquet").read_bytes() == (local / "collected.parquet").read_bytes()
     assert table_files(on_slurm) == table_files(local)
     assert len(table_files(local)) == len(TABLES) * 8
+
+
+REPLENISHMENT = """[sweep]
+name = "tiny"
+scenario = "replenishment"
+runs_per_task = 2
+[set]
+trials = 2
+ticks = 200
+[[grid]]
+strategy = ["fixed"]
+n_chargers = [0]
+[[grid]]
+strategy = ["mobile"]
+n_chargers = [1, 2, 3]
+"""
+
+
+def test_a_replenishment_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "tiny.toml"
+    path.write_text(REPLENISHMENT)
+    assert cli.main(["sweep", "plan", str(path), "--results", "slurm"]) == 0
+    try:
+        job = subprocess.run(["sbatch", "--wait", str(tmp_path / "slurm" / "tiny" / "tiny.sbatch")], env=slurm,
+                             capture_output=True, text=True, timeout=600)
+    except subprocess.TimeoutExpired:
+        subprocess.run(["scancel", "--name=dronefleet-tiny"], env=slurm)
+        raise
+    logs = sorted((tmp_path / "slurm" / "tiny" / "_logs").glob("*.out"))
+    printed = "".join(f"--- {log.name}\n{log.read_text()}" for log in logs)
+    assert job.returncode == 0, f"{job.stdout}{job.stderr}\n{printed}"
+    assert len(logs) == 2 and printed.count("ran 2, skipped 0") == 2
+
+    assert cli.main(["sweep", "run", str(path), "--results", "local", "--jobs", "2"]) == 0
+    for results in ("slurm", "local"):
+        assert cli.main(["sweep", "collect", str(path), "--results", results]) == 0
+    on_slurm, local = tmp_path / "slurm" / "tiny", tmp_path / "local" / "tiny"
+    assert len(pd.read_parquet(on_slurm / "collected.parquet")) == 4 * 2  # a row per trial
+    tables = SCENARIOS["replenishment"].tables
+    files = {p.relative_to(local): p.read_bytes() for t in tables for p in sorted((local / t).rglob("*.parquet"))}
+    assert {p.relative_to(on_slurm): p.read_bytes() for t in tables
+            for p in sorted((on_slurm / t).rglob("*.parquet"))} == files
+    assert len(files) == len(tables) * 4

@@ -24,7 +24,7 @@ from pathlib import Path
 
 def compile_engine():
     """Compile (or load from the cache) everything a paper run needs, with a short run."""
-    from ..config import default_config, replace
+    from .config import default_config, replace
     from .simulation import simulate
 
     simulate(replace(default_config(), horizon_weeks=0.1))
@@ -47,7 +47,7 @@ def main(argv=None):
     if args.sweep:
         return bench_sweep(args.sweep, args.jobs, compile_s)
 
-    from ..config import default_config, replace
+    from .config import default_config, replace
     from .simulation import simulate
 
     config = default_config()  # 25 UAVs, 8 weeks, tau = 15 min, least_confident

@@ -29,7 +29,7 @@ def flight_power(payload_kg, frame_mass_kg, battery_mass_kg, n_rotors, rotor_are
 
 
 def config_power(config, payload_kg):
-    """:func:`flight_power` with the UAV parameters of a :class:`~dronefleet.config.Config`, W."""
+    """:func:`flight_power` with the UAV parameters of a :class:`~dronefleet.delivery.config.Config`, W."""
     return flight_power(payload_kg, config.frame_mass_kg, config.battery_mass_kg, config.n_rotors,
                         config.rotor_area_m2, config.air_density_kg_m3, config.gravity_m_s2)
 

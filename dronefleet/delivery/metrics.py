@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from ..config import SECONDS_PER_WEEK
+from .config import SECONDS_PER_WEEK
 from .energy import capable, config_power, drain_per_watt
 from .engine import IN_FLIGHT, OUTCOME_ABORTED, OUTCOME_DELIVERED
 from .policy import standardise

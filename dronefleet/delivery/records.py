@@ -33,8 +33,8 @@ period int16 (operating period: 1, or the saved fleet's plus one for a warm star
 import numpy as np
 import pyarrow as pa
 
-from ..config import SECONDS_PER_WEEK, config_from_dict
 from ..records import arrow_array, arrow_table, read_config_dict, write_tables
+from .config import SECONDS_PER_WEEK, config_from_dict
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")

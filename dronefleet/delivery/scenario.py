@@ -1,9 +1,9 @@
 """The UAV delivery scenario behind the :mod:`dronefleet.scenarios` contract.
 
 A thin adaptor over the delivery modules (this subpackage, the schema in
-:mod:`dronefleet.config`, the summary in :mod:`dronefleet.cli`): it adds no behaviour
-and changes no output byte. The schema is :data:`dronefleet.config.PARAMETERS` (units in
-each doc), validation :func:`dronefleet.config.load_config`, the tables those of
+:mod:`dronefleet.delivery.config`, the summary in :mod:`dronefleet.cli`): it adds no behaviour
+and changes no output byte. The schema is :data:`dronefleet.delivery.config.PARAMETERS` (units in
+each doc), validation :func:`dronefleet.delivery.config.load_config`, the tables those of
 :mod:`dronefleet.delivery.records`. ``dronefleet run`` keeps its own delivery path for
 what only delivery has (fleet files, the progress bar in weeks); it prints and writes
 exactly what this module does.
@@ -11,15 +11,20 @@ exactly what this module does.
 
 import re
 
-from ..config import PARAMETERS, AnyText, Interval, Options, default_config, load_config
 from ..scenarios import Field
+from .config import PARAMETERS, AnyText, Interval, Options, default_config, load_config, resolve_key
+from .config import replace as replace_fields
 
-__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "load", "read_config", "simulate",
-           "format_summary", "describe", "label"]
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
+           "replace", "value", "read_config", "simulate", "outdated", "format_summary", "describe", "label"]
 
 NAME = "delivery"
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
 FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
+#: A run is one replicate, named by its seed: a sweep lists its seeds (a sweep without them is
+#: a forgotten line, not a wish for seed 0 alone).
+SEED_KEY = "seed"
+SEEDS_REQUIRED = True
 
 
 def _allowed(constraint):
@@ -42,8 +47,17 @@ DEFAULTS = {name: getattr(default_config(), name) for name in PARAMETERS}
 
 
 def load(path=None, overrides=(), seed=None):
-    """:func:`dronefleet.config.load_config`: the one validation entry point of delivery."""
+    """:func:`dronefleet.delivery.config.load_config`: the one validation entry point of delivery."""
     return load_config(path, overrides, seed)
+
+
+def replace(config, changes):
+    """:func:`dronefleet.delivery.config.replace`: a validated copy with ``changes`` applied."""
+    return replace_fields(config, **changes)
+
+
+def value(config, name):
+    return getattr(config, name)
 
 
 def read_config(path):
@@ -53,14 +67,26 @@ def read_config(path):
 
 
 def simulate(config):
-    """One run of ``config`` (its fleet file, if any, loaded first) -> its tables
-    (:mod:`dronefleet.delivery.records`)."""
-    from .fleet import load_fleet
+    """One run of ``config`` -> its tables (:mod:`dronefleet.delivery.records`); the simulation
+    loads the run's fleet file, if any."""
     from .records import tables
     from .simulation import simulate as run
 
-    fleet = load_fleet(config.fleet_file, config) if config.fleet_file else None
-    return tables(run(config, fleet=fleet))
+    return tables(run(config))
+
+
+def outdated(config, summary):
+    """True if the run starts from a saved fleet (``fleet_file``, ``{seed}`` replaced) written
+    after the run's ``summary``: the fleet was written again since (the sweep that made it
+    rerun after a fix, say), so the run's results come from a fleet that is gone, and a rerun
+    replaces them rather than leave old and new fleets mixed in one sweep. A fleet file that
+    no longer exists leaves the run as it is: nothing says it is stale."""
+    from .fleet import seeded_path
+
+    if not config.fleet_file:
+        return False
+    fleet = seeded_path(config.fleet_file, config.seed)
+    return fleet.exists() and fleet.stat().st_mtime_ns > summary.stat().st_mtime_ns
 
 
 def format_summary(tables):

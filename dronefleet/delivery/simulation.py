@@ -18,7 +18,7 @@ import numpy as np
 
 from . import engine
 from .auction import BIDS_ON, RULES
-from ..config import SECONDS_PER_WEEK
+from .config import SECONDS_PER_WEEK
 from .energy import charge_rate, config_power, drain_per_watt
 from .fleet import load_fleet
 from .orders import generate_orders

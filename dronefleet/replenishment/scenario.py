@@ -19,6 +19,12 @@ parameters are checked in one place, :meth:`Params.validate`; this module adds
 only ``first_trial`` (trial k uses seed 876 k, so any slice of trials can run
 alone). ``--set key=value`` takes ``section.key`` or the bare key.
 
+A run holds all its trials, so in a sweep (:mod:`dronefleet.sweep`) a configuration is one
+run: its seed key is ``first_trial``, and ``[sweep] seeds`` are optional first trials of
+blocks of ``trials`` trials (``seeds = [1, 51]`` with ``trials = 50``: trials 1-100 in two
+runs per configuration, which can be added later without redoing the first 50; blocks that
+would share a trial are refused).
+
 Tables (:func:`simulate`): ``summary``, one row per trial (the columns of
 :func:`dronefleet.replenishment.simulate.summary_columns`); ``timeseries``, one row
 per trial and sampled tick: ``trial``, ``tick``, robots per controller phase
@@ -43,8 +49,9 @@ from .bounds import COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_
 from .params import BASE_CAPACITY, Params
 from .simulate import TRIAL_SEED_FACTOR, summary_columns
 
-__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "Config", "load", "config_from_dict",
-           "read_config", "simulate", "format_summary", "describe", "label", "format_bounds"]
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "Config", "load",
+           "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "simulate",
+           "format_summary", "describe", "label", "format_bounds"]
 
 NAME = "replenishment"
 TABLES = ("summary", "timeseries")
@@ -54,6 +61,9 @@ FIGURES: tuple[str, ...] = ("fig09", "fig10", "fig11", "fig12")
 
 #: Largest first trial index: seeds 876 k stay far inside int64.
 MAX_FIRST_TRIAL = 10**15
+#: A sweep's seeds are first trials; without them a configuration is one run of the base's trials.
+SEED_KEY = "first_trial"
+SEEDS_REQUIRED = False
 
 
 SCHEMA: dict[str, Field] = {
@@ -160,7 +170,7 @@ def _unknown_key(key, where=""):
                        f"Allowed keys: {', '.join(f'{SCHEMA[k].section}.{k}' for k in SCHEMA)}")
 
 
-def _resolve(key):
+def resolve_key(key):
     """'section.key' or a bare key -> the key name."""
     section, dot, name = key.rpartition(".")
     if name not in SCHEMA or (dot and section != SCHEMA[name].section):
@@ -212,7 +222,7 @@ def load(path=None, overrides=(), seed=None) -> Config:
     if seed is not None:
         raise ConfigError(f"--seed does not apply to {NAME}: trial k uses seed {TRIAL_SEED_FACTOR} k; "
                           "choose the trials with --set first_trial=K --set trials=N")
-    parsed = [(_parse_override(o, _resolve), o) for o in overrides]
+    parsed = [(_parse_override(o, resolve_key), o) for o in overrides]
     values, origin = dict(DEFAULTS), {}
     if path is not None:
         values.update(_flatten(read_toml(path)[1], str(path), origin))
@@ -220,6 +230,23 @@ def load(path=None, overrides=(), seed=None) -> Config:
         values[name] = value
         origin[name] = f"--set {text}"
     return _build(values, origin)
+
+
+def value(config: Config, name):
+    return config.value(name)
+
+
+def replace(config: Config, changes) -> Config:
+    """A validated copy of ``config`` with ``changes`` (``{key: value}``) applied, typed as in :func:`load`."""
+    for name in changes:
+        if name not in SCHEMA:
+            raise _unknown_key(str(name))
+    return _build({**{name: config.value(name) for name in SCHEMA}, **changes}, {})
+
+
+def replicates(config: Config) -> range:
+    """The trials a run of ``config`` holds."""
+    return range(config.first_trial, config.last_trial + 1)
 
 
 def config_from_dict(document) -> Config:

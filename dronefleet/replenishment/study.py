@@ -1,7 +1,8 @@
 """``dronefleet reproduce fig09..fig12``: the replenishment figures' tables, PNGs and check.
 
 Called by :mod:`dronefleet.reproduce` for the figures of :data:`experiments.FIGURES`. Each
-figure runs its whole grid (:func:`experiments.load_grid`; seconds, so nothing is reused)
+figure runs its whole grid (its sweep file, read by :func:`dronefleet.sweep.load_sweep`;
+seconds, so nothing is reused)
 and writes under ``<results>/<figure>/``: ``runs.parquet`` (one row per trial: configuration,
 trial, seed, metrics) and ``bounds.parquet`` (one row per configuration), then draws its
 PNG from those two files alone. ``--quick``: :data:`QUICK_TRIALS` trials of
@@ -13,7 +14,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from ..sweep import SweepError
+from ..sweep import SweepError, load_sweep
 from . import experiments
 from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
 from .params import Params
@@ -47,25 +48,25 @@ TITLES = {
 
 
 def grid(figure, quick=False):
-    """The figure's grid (:func:`experiments.load_grid`), shortened with ``quick``."""
-    path = experiments.grid_path(figure)
-    if quick:
-        return experiments.load_grid(path, changes={"ticks": QUICK_TICKS}, trials=QUICK_TRIALS)
-    return experiments.load_grid(path)
+    """The figure's sweep (``configs/sweeps/replenishment-<figure>.toml``), shortened with ``quick``."""
+    changes = {"ticks": QUICK_TICKS, "trials": QUICK_TRIALS} if quick else None
+    return load_sweep(experiments.grid_path(figure), changes=changes)
 
 
 def tidy(study, figure):
     """Run the figure's grid; write ``runs.parquet`` and ``bounds.parquet``."""
     from ..reproduce import _write_parquet
 
-    g = grid(figure, study.quick)
+    sweep = grid(figure, study.quick)
+    configs = [run.config for run in sweep.runs]
     start = time.perf_counter()
-    runs = experiments.run_configs(g.configs, g.trials, study.jobs)
-    study.log(f"  {g.name}: {len(g.configs)} configurations x {g.trials} trials of {g.configs[0].ticks} ticks "
+    runs = experiments.run_configs(configs, study.jobs)
+    first = configs[0].params
+    study.log(f"  {sweep.name}: {len(configs)} configurations x {first.trials} trials of {first.ticks} ticks "
               f"in {time.perf_counter() - start:.1f} s", flush=True)
     d = study.figure_dir(figure)
     _write_parquet(runs, d / "runs.parquet")
-    _write_parquet(experiments.bounds_table(g.configs), d / "bounds.parquet")
+    _write_parquet(experiments.bounds_table([config.params for config in configs]), d / "bounds.parquet")
 
 
 def draw(study, figure):

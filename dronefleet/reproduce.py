@@ -98,6 +98,7 @@ class Study:
         self._sweeps = {}
         self._ensured = set()   # sweeps checked (and completed) by this study: figures share them
         self._datasets = {}     # (sweep, table) -> its dataset of done runs, opened once
+        self.memo = {}          # results figures share within one reproduce call, by scenario
 
     def sweep(self, name):
         """The sweep ``name``, with --quick's changes; the reservation sweep reads the rules sweep's fleets."""
@@ -343,6 +344,8 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
     except ImportError as error:
         raise SweepError(str(error)) from None
     study = Study(results, quick, jobs, log)
+    if not redraw:
+        replenishment.run_together(study, [figure for figure in figures if figure in REPLENISHMENT_FIGURES])
     drawn = {}
     for figure in figures:
         start = time.perf_counter()

@@ -99,6 +99,33 @@ def test_quick_mode_writes_every_trial_and_bound_and_the_png(tiny, figure):
     assert drawn[figure] == [png] and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_figures_run_together_equal_each_run_alone_and_share_configurations(tiny, tmp_path, monkeypatch):
+    results, _ = tiny
+    calls = []
+    real = experiments._trials_of
+    monkeypatch.setattr(experiments, "_trials_of", lambda config: calls.append(config) or real(config))
+    monkeypatch.setattr(study, "QUICK_TRIALS", TINY_TRIALS)
+    monkeypatch.setattr(study, "QUICK_TICKS", TINY_TICKS)
+    for figure in ("fig10", "fig11"):  # alone, each in its own reproduce call
+        reproduce.reproduce([figure], tmp_path / "alone", quick=True, jobs=1, log=lambda *a, **k: None)
+    alone = len(calls)
+    calls.clear()
+    reproduce.reproduce(FIGURES, tmp_path / "together", quick=True, jobs=1, log=lambda *a, **k: None)
+    together = [run.config for figure in FIGURES
+                for run in study.grid(figure, quick=True).runs]
+    assert len(calls) == len(set(calls)) == len(set(together)) < len(together)  # shared ones once
+    assert alone == len(grid("fig10")) + len(grid("fig11"))
+    for figure in FIGURES:
+        for table in ("runs", "bounds"):
+            name = f"quick/{figure}/{table}.parquet"
+            pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "together" / name),
+                                          pd.read_parquet(results / name))
+    for figure in ("fig10", "fig11"):
+        name = f"quick/{figure}/runs.parquet"
+        pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "alone" / name),
+                                      pd.read_parquet(results / name))
+
+
 def test_a_configurations_trials_in_the_table_are_those_of_simulate(tiny):
     results, _ = tiny
     runs = pd.read_parquet(results / "quick" / "fig12" / "runs.parquet")

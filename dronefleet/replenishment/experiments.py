@@ -60,7 +60,7 @@ def _trials_of(config) -> dict:
     return {column: result[column] for column in ("trial", "seed", *METRIC_COLUMNS)}
 
 
-def run_configs(configs, jobs=1) -> pd.DataFrame:
+def run_configs(configs, jobs=1, done=None) -> pd.DataFrame:
     """Every trial of every configuration as one tidy table.
 
     Parameters
@@ -71,6 +71,10 @@ def run_configs(configs, jobs=1) -> pd.DataFrame:
     jobs : int
         Processes (:func:`dronefleet.executors.local`; the first configuration runs here
         and compiles or loads the kernel before any worker starts).
+    done : dict, optional
+        Per-trial results by configuration, already run (those are not run again) and
+        filled with the ones run here: figures that share configurations, or that run
+        together on one set of workers, pass the same dict.
 
     Returns
     -------
@@ -81,17 +85,17 @@ def run_configs(configs, jobs=1) -> pd.DataFrame:
     from ..executors import local
 
     configs = list(configs)
-    results = {}
-    for config, result, error in local(_trials_of, configs, jobs):
+    done = {} if done is None else done
+    todo = list(dict.fromkeys(config for config in configs if config not in done))
+    for config, result, error in local(_trials_of, todo, jobs):
         if error is not None:
             raise SweepError(f"configuration {config_row(config.params)}: {error}")
-        results[config] = result
+        done[config] = result
     frames = []
     for config in configs:
-        per_trial = results[config]
         trials = config.params.trials
         head = pd.DataFrame({column: np.repeat(value, trials) for column, value in config_row(config.params).items()})
-        frames.append(pd.concat([head, pd.DataFrame(per_trial)], axis=1))
+        frames.append(pd.concat([head, pd.DataFrame(done[config])], axis=1))
     return pd.concat(frames, ignore_index=True)
 
 

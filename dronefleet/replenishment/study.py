@@ -53,14 +53,32 @@ def grid(figure, quick=False):
     return load_sweep(experiments.grid_path(figure), changes=changes)
 
 
+def run_together(study, figures):
+    """Run the grids of ``figures`` as one batch before their tables are tidied.
+
+    One set of worker processes serves them all (each worker loads the kernel once, not
+    once per figure), the configurations several figures share (the default fixed and
+    MC(6, 2) ones are in every grid) run once, and no worker idles at a figure's end while
+    the next one waits. The results stay in ``study.memo``, where :func:`tidy` finds them.
+    """
+    if len(figures) < 2:
+        return
+    configs = [run.config for figure in figures for run in grid(figure, study.quick).runs]
+    start = time.perf_counter()
+    experiments.run_configs(configs, study.jobs, done=study.memo.setdefault("replenishment", {}))
+    study.log(f"replenishment grids of {', '.join(figures)}: {len(set(configs))} distinct configurations "
+              f"in {time.perf_counter() - start:.1f} s", flush=True)
+
+
 def tidy(study, figure):
-    """Run the figure's grid; write ``runs.parquet`` and ``bounds.parquet``."""
+    """Run the figure's grid (what :func:`run_together` has not run); write ``runs.parquet`` and
+    ``bounds.parquet``."""
     from ..reproduce import _write_parquet
 
     sweep = grid(figure, study.quick)
     configs = [run.config for run in sweep.runs]
     start = time.perf_counter()
-    runs = experiments.run_configs(configs, study.jobs)
+    runs = experiments.run_configs(configs, study.jobs, done=study.memo.setdefault("replenishment", {}))
     first = configs[0].params
     study.log(f"  {sweep.name}: {len(configs)} configurations x {first.trials} trials of {first.ticks} ticks "
               f"in {time.perf_counter() - start:.1f} s", flush=True)

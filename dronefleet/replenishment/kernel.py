@@ -14,8 +14,10 @@ CPU. Random numbers come from xoshiro256** streams (``rng[trial, stream]``).
 Most robots stand still most ticks, so work whose inputs did not change is
 reused rather than redone, never approximated: pair geometry only for pairs
 with a robot that moved, neighbour lists only when a pair crossed a range,
-obstacle rays only after the robot or one within ray reach moved. Any such
-change must leave tests/test_replenishment_fingerprints.py passing.
+obstacle rays only after the robot or one within ray reach moved, and a
+control step not at all when the last one changed no state and commanded no
+motion and none of its inputs changed since. Any such change must leave
+tests/test_replenishment_fingerprints.py passing.
 
 Decisions go through a supervisor VM that executes the loaded tables
 (section 5.1); the only hand-written parts are the event conditions (5.2) and
@@ -470,6 +472,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     sup = np.zeros((n_trials, n, kmax), dtype=np.int64)
     vm_still = np.zeros((n_trials, n), dtype=np.bool_)    # last VM step changed nothing
     vm_mask = np.zeros((n_trials, n), dtype=np.int64)     # ... under these conditions
+    # the last control step changed no state and commanded no motion ...
+    quiet = np.zeros((n_trials, n), dtype=np.bool_)
+    quiet_lh = np.zeros((n_trials, n), dtype=np.int64)    # ... with low + 2 high
     # messages, double-buffered: [tick parity, trial, robot]
     msg_state = np.zeros((2, n_trials, n), dtype=np.int64)
     msg_req = np.zeros((2, n_trials, n), dtype=np.bool_)
@@ -515,6 +520,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     range_n = np.zeros(n, dtype=np.int64)  # robots closer than R_RAB, ascending index
     range_idx = np.zeros((n, n), dtype=np.int64)
     moved = np.zeros(n, dtype=np.bool_)   # pose changed this tick
+    # a robot in range moved, crossed R_RAB or sent a new message: i's inputs changed
+    stirred = np.zeros(n, dtype=np.bool_)
     obs_valid = np.zeros(n, dtype=np.bool_)   # obs_*_last is the current obstacle vector
     obs_x_last = np.zeros(n)
     obs_y_last = np.zeros(n)
@@ -573,6 +580,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             # The neighbour lists change only when a pair crosses R_RAB or RAY_REACH.
             crossed = t == 1
             for i in range(n):
+                stirred[i] = t == 1
+            for i in range(n):
                 for j in range(i + 1, n):
                     if moved[i] or moved[j]:
                         before = dist[i, j]
@@ -592,6 +601,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         if (before < R_RAB) != (d < R_RAB) \
                                 or (before < RAY_REACH) != (d < RAY_REACH):
                             crossed = True
+                        if before < R_RAB or d < R_RAB:
+                            stirred[i] = True
+                            stirred[j] = True
             if crossed:
                 for i in range(n):
                     near_n[i] = 0
@@ -613,6 +625,13 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                 if moved[i]:
                     for m in range(near_n[i]):
                         obs_valid[near_idx[i, m]] = False
+                # the buffer nxt still holds the messages of t - 2
+                if msg_state[cur, tr, i] != msg_state[nxt, tr, i] \
+                        or msg_req[cur, tr, i] != msg_req[nxt, tr, i] \
+                        or msg_from[cur, tr, i] != msg_from[nxt, tr, i] \
+                        or msg_to[cur, tr, i] != msg_to[nxt, tr, i]:
+                    for m in range(range_n[i]):
+                        stirred[range_idx[i, m]] = True
 
             # 3. work count (working as left by step t - 1, current centre)
             n_t = 0
@@ -633,6 +652,7 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     right[tr, i] = 0.0
                     moving[tr, i] = False
                     working[tr, i] = False
+                    quiet[tr, i] = False
                     if is_worker:
                         msg_state[nxt, tr, i] = MSG_WORKER
                         msg_req[nxt, tr, i] = False
@@ -648,6 +668,24 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                         for k in range(kmax):
                             tr_sup[tr, t - 1, i, k] = sup[tr, i, k]
                     continue
+
+                low = e_start < low_threshold(x[tr, i])
+                high = e_start >= 0.99 * cap[i]
+                if quiet[tr, i] and not stirred[i] and quiet_lh[tr, i] == low + 2 * high:
+                    # The last step changed no state and commanded no motion, and every input
+                    # (own pose and state, neighbours' geometry and messages, low, high) is
+                    # the same: this step would repeat it exactly, message included.
+                    msg_state[nxt, tr, i] = msg_state[cur, tr, i]
+                    msg_req[nxt, tr, i] = msg_req[cur, tr, i]
+                    msg_from[nxt, tr, i] = msg_from[cur, tr, i]
+                    msg_to[nxt, tr, i] = msg_to[cur, tr, i]
+                    if trace:
+                        for k in range(kmax):
+                            tr_sup[tr, t - 1, i, k] = sup[tr, i, k]
+                    continue
+                requesting0 = requesting[tr, i]
+                provider0 = provider[tr, i]
+                served0 = served[tr, i]
 
                 # 2. neighbours (messages one tick old, positions current) and repulsion
                 c = ct[tr, i]
@@ -680,8 +718,6 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     rep_x, rep_y = _clamp_length((rep_wx * c + rep_wy * s) / n_heard,
                                                  (-rep_wx * s + rep_wy * c) / n_heard, V_MAX)
 
-                low = e_start < low_threshold(x[tr, i])
-                high = e_start >= 0.99 * cap[i]
                 gx = x[tr, i] + 0.03 * c + 0.009 * s
                 gy = y[tr, i] + 0.03 * s - 0.009 * c
                 colour = floor_colour(gx, gy, mobile)
@@ -859,6 +895,11 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     msg_to[nxt, tr, i] = served[tr, i]
                 if trace:
                     tr_event[tr, t - 1, i] = event
+                # vm_still after a VM step (run or skipped) means no state change, no event
+                quiet[tr, i] = (steps[tr, i] > 4 and vm_still[tr, i] and not moving[tr, i]
+                                and requesting[tr, i] == requesting0
+                                and provider[tr, i] == provider0 and served[tr, i] == served0)
+                quiet_lh[tr, i] = low + 2 * high
 
             # 5. energy (section 7): workers (with work and transfers), then MCs; an MC's own
             # step comes after the transfers that drew on it, as in the code.

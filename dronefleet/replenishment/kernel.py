@@ -484,6 +484,7 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     range_n = np.zeros(n, dtype=np.int64)  # robots closer than R_RAB, ascending index
     range_idx = np.zeros((n, n), dtype=np.int64)
     moved = np.zeros(n, dtype=np.bool_)   # pose changed this tick
+    movers = np.zeros(n, dtype=np.int64)  # the robots that moved, ascending
     # a robot in range moved, crossed R_RAB or sent a new message: i's inputs changed
     stirred = np.zeros(n, dtype=np.bool_)
     obs_valid = np.zeros(n, dtype=np.bool_)   # obs_*_last is the current obstacle vector
@@ -520,9 +521,13 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             cur = (t - 1) % 2       # messages set at t - 1
             nxt = t % 2             # messages set now, read at t + 1
             # 1. act + physics: last tick's wheel command
+            n_movers = 0
             for i in range(n):
                 # at tick 1 nothing of this trial's geometry is computed yet
                 moved[i] = t == 1 or left[tr, i] != 0.0 or right[tr, i] != 0.0
+                if moved[i]:
+                    movers[n_movers] = i
+                    n_movers += 1
                 if left[tr, i] != 0.0 or right[tr, i] != 0.0:
                     v = (left[tr, i] + right[tr, i]) * 0.5 / 100.0
                     omega = (right[tr, i] - left[tr, i]) / 100.0 / AXLE
@@ -536,18 +541,22 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             # A robot's obstacle vector depends on its own pose and the robots within
             # RAY_REACH, so it is recomputed only after it or one of those (before
             # or after the move) moved.
-            for i in range(n):
-                if moved[i]:
-                    obs_valid[i] = False
-                    for m in range(near_n[i]):
-                        obs_valid[near_idx[i, m]] = False
+            for a in range(n_movers):
+                i = movers[a]
+                obs_valid[i] = False
+                for m in range(near_n[i]):
+                    obs_valid[near_idx[i, m]] = False
             # The neighbour lists change only when a pair crosses R_RAB or RAY_REACH.
             crossed = t == 1
             for i in range(n):
                 stirred[i] = t == 1
-            for i in range(n):
-                for j in range(i + 1, n):
-                    if moved[i] or moved[j]:
+            # pairs with a mover (few per tick), each once, computed as (lower, higher index)
+            for a in range(n_movers):
+                mover = movers[a]
+                for other in range(n):
+                    if other != mover and not (moved[other] and other < mover):
+                        i = min(mover, other)
+                        j = max(mover, other)
                         before = dist[i, j]
                         d, ux, uy, magnitude = pair_geometry(x[tr, j] - x[tr, i],
                                                              y[tr, j] - y[tr, i])
@@ -585,10 +594,11 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                             near_n[i] += 1
                             near_idx[j, near_n[j]] = i
                             near_n[j] += 1
+            for a in range(n_movers):
+                i = movers[a]
+                for m in range(near_n[i]):
+                    obs_valid[near_idx[i, m]] = False
             for i in range(n):
-                if moved[i]:
-                    for m in range(near_n[i]):
-                        obs_valid[near_idx[i, m]] = False
                 # the buffer nxt still holds the messages of t - 2
                 if msg_state[cur, tr, i] != msg_state[nxt, tr, i] \
                         or msg_req[cur, tr, i] != msg_req[nxt, tr, i] \

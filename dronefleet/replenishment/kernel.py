@@ -82,6 +82,8 @@ RAY_ANGLE_DIVISORS = (10.5884, 3.5999, 2.0, 1.2, 0.8571, 0.6667, 0.5806, 0.5247)
 HARD_TO_SOFT = 70.0 / 180.0 * PI
 TO_HARD = 90.0 / 180.0 * PI
 NO_TURN = 10.0 / 180.0 * PI
+# below tan(10 deg) = 0.17633: |fy| <= this * fx (fx > 0) puts the angle below 9.999 deg
+NO_TURN_SLOPE = 0.1763
 APPROACH_CM = 8.07       # the worker with MC stops this far from its provider [cm]
 
 
@@ -213,6 +215,11 @@ def _wall_hit(s, u):
 @njit(cache=True)
 def wheels_from_force(fx, fy, mode):
     """Turning-mode update and wheel speeds (left, right) [cm/s] for force F (section 4)."""
+    if mode == TURN_NO and fx > 0.0 and abs(fy) <= NO_TURN_SLOPE * fx:
+        # the angle is below NO_TURN by far more than atan2's rounding: the mode stays
+        # NO and both wheels get s, so atan2 (the costly part) is not needed
+        s = min(np.sqrt(fx * fx + fy * fy), V_MAX)
+        return s, s, mode
     angle = atan2(fy, fx)
     s = min(np.sqrt(fx * fx + fy * fy), V_MAX)
     a = abs(angle)

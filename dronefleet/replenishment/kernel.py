@@ -548,8 +548,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             # A robot's obstacle vector depends on its own pose and the robots within
             # RAY_REACH, so it is recomputed only after it or one of those (before
             # or after the move) moved.
-            for a in range(n_movers):
-                i = movers[a]
+            for mi in range(n_movers):
+                i = movers[mi]
                 obs_valid[i] = False
                 for m in range(near_n[i]):
                     obs_valid[near_idx[i, m]] = False
@@ -558,8 +558,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
             for i in range(n):
                 stirred[i] = t == 1
             # pairs with a mover (few per tick), each once, computed as (lower, higher index)
-            for a in range(n_movers):
-                mover = movers[a]
+            for mi in range(n_movers):
+                mover = movers[mi]
                 for other in range(n):
                     if other != mover and not (moved[other] and other < mover):
                         i = min(mover, other)
@@ -601,8 +601,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                             near_n[i] += 1
                             near_idx[j, near_n[j]] = i
                             near_n[j] += 1
-            for a in range(n_movers):
-                i = movers[a]
+            for mi in range(n_movers):
+                i = movers[mi]
                 for m in range(near_n[i]):
                     obs_valid[near_idx[i, m]] = False
             for i in range(n):

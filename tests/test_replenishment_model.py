@@ -261,6 +261,46 @@ def test_worker_with_mobile_charger_moves_to_work_only_when_neither_low_nor_at_c
         assert energy >= (x + 0.5) / 0.12 + 10.0
 
 
+# ------------------------------------------------------------------ motion
+
+
+def _wheels_by_the_spec(fx, fy, mode):
+    """Section 4's turning rules, every angle from fpmath's atan2 (no shortcut)."""
+    angle = K.atan2(fy, fx)
+    s = min(math.sqrt(fx * fx + fy * fy), K.V_MAX)
+    a = abs(angle)
+    if mode == K.TURN_HARD and a <= K.HARD_TO_SOFT:
+        mode = K.TURN_SOFT
+    if mode == K.TURN_SOFT:
+        mode = K.TURN_HARD if a > K.TO_HARD else K.TURN_NO if a <= K.NO_TURN else mode
+    elif mode == K.TURN_NO:
+        mode = K.TURN_HARD if a > K.TO_HARD else K.TURN_SOFT if a > K.NO_TURN else mode
+    if mode == K.TURN_NO:
+        s1, s2 = s, s
+    elif mode == K.TURN_SOFT:
+        f = (K.TO_HARD - a) / K.TO_HARD
+        s1, s2 = s * f, s * (2.0 - f)
+    else:
+        s1, s2 = -K.V_MAX, K.V_MAX
+    return (s1, s2, mode) if angle > 0.0 else (s2, s1, mode)
+
+
+def test_wheels_skip_atan2_only_where_the_result_cannot_change():
+    """The no-turn shortcut (no atan2 well inside 10 degrees) gives the spec's bits,
+    also for forces right at the shortcut's edge and at the 10-degree boundary."""
+    rng = np.random.default_rng(11)
+    angles = np.concatenate([rng.uniform(-math.pi, math.pi, 3000),
+                             math.atan(K.NO_TURN_SLOPE) * (1.0 + rng.uniform(-1e-6, 1e-6, 500)),
+                             K.NO_TURN * (1.0 + rng.uniform(-1e-9, 1e-9, 500))])
+    angles *= rng.choice([-1.0, 1.0], angles.size)
+    lengths = rng.uniform(0.5, 30.0, angles.size)
+    forces = [(r * math.cos(t), r * math.sin(t)) for r, t in zip(lengths, angles)]
+    forces += [(1.0, 0.0), (1.0, -0.0), (3.0, K.NO_TURN_SLOPE * 3.0), (-1.0, 0.0)]
+    for fx, fy in forces:
+        for mode in (K.TURN_NO, K.TURN_SOFT, K.TURN_HARD):
+            assert K.wheels_from_force(fx, fy, mode) == _wheels_by_the_spec(fx, fy, mode)
+
+
 # ------------------------------------------------------------------ supervisor VM
 
 

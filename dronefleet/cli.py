@@ -298,7 +298,8 @@ def _add_reproduce_command(commands, arguments):
         return
     from . import reproduce
 
-    p.add_argument("figure", choices=(*reproduce.FIGURES, "all"))
+    p.add_argument("figure", nargs="+", choices=(*reproduce.FIGURES, "all"),
+                   help="one or more figures, or all (figures asked for together share their runs)")
     p.add_argument("--quick", action="store_true",
                    help=f"a check in seconds, under <results>/quick/: delivery figures with seeds "
                         f"{reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]} and "

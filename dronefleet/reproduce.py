@@ -1,7 +1,7 @@
 """Reproduce the study's figures (EXPERIMENTS.md, Figures 16-20; REPLENISHMENT.md, Figures 9-12).
 
-``dronefleet reproduce FIGURE [--quick] [--jobs J] [--results DIR] [--redraw]``, FIGURE one
-of fig09..fig12, fig16..fig20 or ``all``. Figures 9-12 (energy replenishment) run their grid
+``dronefleet reproduce FIGURE... [--quick] [--jobs J] [--results DIR] [--redraw]``, FIGURE
+one or more of fig09..fig12, fig16..fig20, or ``all``. Figures 9-12 (energy replenishment) run their grid
 ``configs/sweeps/replenishment-figNN.toml`` whole (seconds) into ``runs.parquet`` (one row per
 trial) and ``bounds.parquet``: see :mod:`dronefleet.replenishment.study`. Each delivery
 figure needs one or more sweeps of ``configs/sweeps/``:
@@ -415,7 +415,8 @@ def check(figure, results="results", quick=False, log=print):
 
 def command(args):
     """``dronefleet reproduce``."""
-    figures = FIGURES if args.figure == "all" else (args.figure,)
+    figures = FIGURES if "all" in args.figure else tuple(dict.fromkeys(args.figure))
+    named = " ".join(args.figure)
     start = time.perf_counter()
     if args.check:
         if args.redraw:
@@ -423,12 +424,12 @@ def command(args):
         differences = [line for figure in figures for line in check(figure, args.results, args.quick)]
         for line in differences:
             print(f"  differs: {line}")
-        print(f"reproduce {args.figure} --check: "
+        print(f"reproduce {named} --check: "
               f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
               f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
     reproduce(figures, args.results, args.quick, args.jobs, args.redraw)
-    print(f"reproduce {args.figure}: done in {time.perf_counter() - start:.1f} s")
+    print(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s")
     return 0
 
 

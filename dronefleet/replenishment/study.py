@@ -77,11 +77,14 @@ def tidy(study, figure):
 
     sweep = grid(figure, study.quick)
     configs = [run.config for run in sweep.runs]
+    done = study.memo.setdefault("replenishment", {})
+    ran_before = sum(config in done for config in configs)
     start = time.perf_counter()
-    runs = experiments.run_configs(configs, study.jobs, done=study.memo.setdefault("replenishment", {}))
+    runs = experiments.run_configs(configs, study.jobs, done=done)
     first = configs[0].params
-    study.log(f"  {sweep.name}: {len(configs)} configurations x {first.trials} trials of {first.ticks} ticks "
-              f"in {time.perf_counter() - start:.1f} s", flush=True)
+    study.log(f"  {sweep.name}: {len(configs)} configurations x {first.trials} trials of {first.ticks} ticks"
+              + (f", {ran_before} run with the other figures" if ran_before else "")
+              + f"; {time.perf_counter() - start:.1f} s", flush=True)
     d = study.figure_dir(figure)
     _write_parquet(runs, d / "runs.parquet")
     _write_parquet(experiments.bounds_table([config.params for config in configs]), d / "bounds.parquet")

@@ -38,7 +38,10 @@ OUTCOME_NAMES = ("in_flight", "delivered", "aborted")
 
 # Supervisor events the engine generates: columns of the compiled transition table.
 EVENT_NAMES = ("capableTask", "notCapableTask", "bid", "wonBid", "lostBid", "deliver", "condReturn", "return")
-EV_CAPABLE, EV_NOT_CAPABLE, EV_BID, EV_WON, EV_LOST_BID, EV_DELIVER, EV_COND_RETURN, EV_RETURN = range(8)
+# numpy integers, not Python ints: numba types a global Python int as a literal and would compile
+# _step and supervisor.take once per event.
+EV_CAPABLE, EV_NOT_CAPABLE, EV_BID, EV_WON, EV_LOST_BID, EV_DELIVER, EV_COND_RETURN, EV_RETURN = (
+    np.int64(event) for event in range(len(EVENT_NAMES)))
 
 # Status returned by ``advance``. INVALID_STATE: no event fits the state (e.g. a NaN event time
 # from non-finite input); the kernel stops rather than write anywhere.
@@ -59,6 +62,9 @@ SOC_MARGIN = 1e-12  # percent
 THRESHOLD_MARGIN = 1e-9  # relative, on 100 - SoC (see threshold_gap)
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
+# Queue position and membership changes, numpy integers for one compiled queued_at and _tree_add
+# (a Python int literal would be a specialisation of its own).
+OLDEST, QUEUED, TAKEN_OUT = np.int64(0), np.int64(1), np.int64(-1)
 #: Tick indices from here on stand for "never" (NO_TICK): k * interval is no longer exact
 #: for larger k, and no run processes 2^52 ticks.
 MAX_TICK = 2.0 ** 52
@@ -315,8 +321,8 @@ def _enqueue(book, fleet, counters, order):
         link[order] = link[previous]
         link[previous] = order
     else:
-        link[order] = queued_at(tree, 0) if n > 0 else -1
-    _tree_add(tree, order, 1)
+        link[order] = queued_at(tree, OLDEST) if n > 0 else -1
+    _tree_add(tree, order, QUEUED)
     counters[QUEUE_LEN] = n + 1
     coef = fleet.coef
     reach = fleet.reach
@@ -333,7 +339,7 @@ def _dequeue(book, fleet, counters, pos):
     order = queued_at(tree, pos)
     if pos > 0:
         book.queue_next[queued_at(tree, pos - 1)] = book.queue_next[order]
-    _tree_add(tree, order, -1)
+    _tree_add(tree, order, TAKEN_OUT)
     counters[QUEUE_LEN] -= 1
     coef = fleet.coef
     reach = fleet.reach
@@ -388,7 +394,7 @@ def _earliest_bid(book, fleet, counters, params, t):
         else:
             if fleet.reach_stale[i]:
                 best = -np.inf
-                order = queued_at(book.queue_tree, 0) if counters[QUEUE_LEN] > 0 else -1
+                order = queued_at(book.queue_tree, OLDEST) if counters[QUEUE_LEN] > 0 else -1
                 while order >= 0:
                     best = max(best, _order_value(fleet.coef, i, book.x_distance[order], book.x_mass[order]))
                     order = book.queue_next[order]
@@ -457,7 +463,7 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
                 return tick + j
         order = link[order]
         if order < 0:  # past the newest: round again from the oldest
-            order = queued_at(tree, 0)
+            order = queued_at(tree, OLDEST)
     return end
 
 
@@ -672,14 +678,19 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
     best = -np.inf
     n_uavs = fleet.mode.shape[0]
     bidder = fleet.bidding
+    # Arrays bound once, and weights read by index: no array views made per UAV in this loop.
+    mode = fleet.mode
+    coef = fleet.coef
+    soc_ref = fleet.soc_ref
+    t_ref = fleet.t_ref
     for i in range(n_uavs):
         bidder[i] = False
-        if fleet.mode[i] != IDLE:
+        if mode[i] != IDLE:
             continue
-        soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
-        f = decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
-        w = fleet.coef[i]
-        bids, score = bid(params.rule, f, np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), soc, params.theta, rng)
+        soc = soc_after_charging(soc_ref[i], t - t_ref[i], params.charge_rate)
+        f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
+        w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
+        bids, score = bid(params.rule, f, w_norm, soc, params.theta, rng)
         if not bids:
             # With reservations the UAV's step waits for the second phase.
             if not params.reserves and not _step(table, fleet, counters, i, EV_NOT_CAPABLE):

@@ -65,7 +65,7 @@ def test_a_nan_event_time_returns_invalid_state_from_the_kernel():
     config = scenario_config(n_uavs=2, horizon_s=3600.0)
     state = scenario(config, arrival=[0.0], distance=[2000.0], mass=[1.0])
     state.counters[engine.NEXT_SAMPLE] = state.series.delivered.shape[0]  # every sample taken
-    state.fleet.next_s[1] = np.nan
+    engine.schedule(state.fleet, 1, np.nan)  # next_s is kept in the event heap: set it through it
     status = engine.advance(state.book, state.fleet, state.attempts, state.series, state.counters,
                             state.params, state.table, state.bid_rng, math.inf)
     assert status == engine.INVALID_STATE

@@ -115,7 +115,7 @@ def test_a_reserved_uav_takes_no_part_in_other_auctions_and_its_order_is_not_adv
     st = scenario(c, [0.0, 10.0], [d0, d1], [1.0, 1.0], policies=policy, soc=40.0)
     simulation.advance(st, 5000.0)
     assert st.fleet.mode[0] == engine.RESERVED
-    assert st.counters[engine.QUEUE_LEN] == 1 and st.book.queue[0] == 1  # order 0 is out of the queue
+    assert st.counters[engine.QUEUE_LEN] == 1 and engine.queued_at(st.book.queue_tree, 0) == 1  # order 0 is out of the queue
     assert st.counters[engine.N_AUCTIONS] == 1  # nobody idle: advertising is suspended
     r = run_state(st, c)
     a = r.attempts
@@ -174,7 +174,7 @@ def test_an_aborted_reserved_order_is_advertised_again_once_its_parcel_is_back()
     assert a["uav"].shape[0] == 1 and a["outcome"][0] == engine.OUTCOME_ABORTED
     # Advertised once at t = 0, then at every tick from the landing on.
     assert r.auctions == 1 + (c.horizon_s / 2.0 - math.ceil(a["return_s"][0] / 2.0) + 1)
-    assert st.counters[engine.QUEUE_LEN] == 1 and st.book.queue[0] == 0
+    assert st.counters[engine.QUEUE_LEN] == 1 and engine.queued_at(st.book.queue_tree, 0) == 0
     t = delivery_records.tables(r)["attempts"].to_pydict()
     assert t["reserved"] == [True] and t["forecast_met"] == [False]
     m = run_metrics(r)

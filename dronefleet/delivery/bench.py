@@ -1,10 +1,21 @@
-"""Benchmark of the paper scenario: ``python -m dronefleet.delivery.bench [--runs N] [--warm]``.
+"""Benchmark of the paper scenario: ``python -m dronefleet.delivery.bench [--runs N] [--warm] [--scaling] [--big]``.
 
 Prints the compile time (a child process compiles the engine into a fresh, empty numba
-cache; skipped with ``--warm``, which uses the existing cache), wall seconds per 8-week
-run after compilation (median, min, max over ``--runs`` seeds), advertisements
-(auctions) per second and the peak resident memory of the process doing the runs. It
-asserts nothing: machines are noisy, read the figures.
+cache; skipped with ``--warm``, which uses the existing cache), and for ``--runs`` seeds of
+the 8-week paper run, after compilation: the engine's wall seconds per run (median, min,
+max), split into set-up (orders, fleet, initial policies), the event loop and collecting
+the result, with what the loop did (orders, attempts, advertisements); then the peak
+resident memory of the process doing the runs. It asserts nothing: machines are noisy,
+read the figures.
+
+``--scaling`` adds the fleet-size table: 25, 100, 400 and 1600 UAVs (10,000 too with
+``--big``) at constant load per UAV (tau = 15 min x 25 / n), fewer weeks for the larger
+fleets (stated in the table; the loop time is also given per 8 weeks, scaled linearly),
+and the fitted exponent of loop time against fleet size.
+
+``--process`` adds whole-process times with warm caches (median of 5 subprocesses): a
+``dronefleet run`` of the paper config, a bare ``python -c "import numpy, numba"`` and
+``dronefleet --help``.
 
 ``--sweep FILE [--jobs J]`` times a whole sweep instead (``configs/sweeps/rules.toml``:
 the 360 runs of Figure 16), as ``dronefleet sweep run`` runs it on J local processes,
@@ -12,6 +23,7 @@ tables written (into a temporary directory): wall time and runs per minute.
 """
 
 import argparse
+import math
 import os
 import resource
 import statistics
@@ -20,6 +32,10 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+#: Fleet sizes of the scaling table and the weeks each is run for (fewer for the big ones).
+SCALING_WEEKS = {25: 8.0, 100: 8.0, 400: 2.0, 1600: 0.5}
+BIG_WEEKS = {10000: 0.125}
 
 
 def compile_engine():
@@ -30,10 +46,102 @@ def compile_engine():
     simulate(replace(default_config(), horizon_weeks=0.1))
 
 
+def timed_run(config):
+    """One run as ``simulate`` does it; (set-up s, loop s, collect s, counters) of its phases."""
+    from . import engine
+    from .simulation import advance, collect, initial_state, snapshot, stops
+
+    start = time.perf_counter()
+    state = initial_state(config)
+    setup = time.perf_counter()
+    snapshots = []
+    loop = 0.0
+    for t in stops(config.horizon_s):
+        before = time.perf_counter()
+        advance(state, t)
+        loop += time.perf_counter() - before
+        snapshots.append(snapshot(state, t))
+    before = time.perf_counter()
+    collect(state, snapshots, config)
+    done = time.perf_counter()
+    counters = state.counters
+    counts = dict(orders=int(counters[engine.NEXT_ORDER]), attempts=int(counters[engine.N_ATTEMPTS]),
+                  auctions=int(counters[engine.N_AUCTIONS]))
+    return setup - start, loop, done - before, counts
+
+
+def _span(values, digits=3):
+    return f"{statistics.median(values):.{digits}f} [{min(values):.{digits}f}-{max(values):.{digits}f}]"
+
+
+def bench_paper(runs):
+    """The paper run (25 UAVs, 8 weeks, tau 15 min, least_confident) for seeds 0..runs-1."""
+    from .config import default_config, replace
+
+    config = default_config()
+    phases = [timed_run(replace(config, seed=seed)) for seed in range(runs)]
+    print(f"paper run: {config.n_uavs} UAVs, {config.horizon_weeks:g} weeks, tau = {config.tau_minutes:g} min, "
+          f"{config.rule}; {runs} runs (seeds 0..{runs - 1}); median [min-max]")
+    print(f"  engine s per run (set-up + loop + collect): {_span([sum(p[:3]) for p in phases])}")
+    print(f"  set-up {_span([p[0] for p in phases])}, loop {_span([p[1] for p in phases])}, "
+          f"collect {_span([p[2] for p in phases])}")
+    counts = phases[0][3]
+    print(f"  seed 0: {counts['orders']} orders, {counts['attempts']} attempts, "
+          f"{counts['auctions']} advertisements (ticks advertised, evaluated or skipped)")
+
+
+def bench_scaling(weeks):
+    """Loop time against fleet size at constant load per UAV; prints the table and the fitted exponent."""
+    from .config import default_config, replace
+
+    base = default_config()
+    print(f"fleet-size scaling: tau = {base.tau_minutes:g} min x {base.n_uavs} / n, {base.rule}, seed 0")
+    print(f"  {'UAVs':>6} {'weeks':>6} {'orders':>9} {'set-up s':>9} {'loop s':>9} {'loop s/8 wk':>12}")
+    sizes, per8 = [], []
+    for n, w in weeks.items():
+        config = replace(base, n_uavs=n, horizon_weeks=w, tau_minutes=base.tau_minutes * base.n_uavs / n)
+        setup, loop, _, counts = timed_run(config)
+        sizes.append(n)
+        per8.append(loop * 8.0 / w)
+        print(f"  {n:>6} {w:>6g} {counts['orders']:>9} {setup:>9.3f} {loop:>9.3f} {per8[-1]:>12.3f}")
+    for m in sorted({len(SCALING_WEEKS), len(sizes)}):  # the goal's range 25-1600, then with 10,000
+        x = [math.log(n) for n in sizes[:m]]
+        y = [math.log(s) for s in per8[:m]]
+        mx, my = statistics.fmean(x), statistics.fmean(y)
+        slope = sum((a - mx) * (b - my) for a, b in zip(x, y)) / sum((a - mx) ** 2 for a in x)
+        print(f"  fitted exponent of loop time per 8 weeks against UAVs ({sizes[0]}-{sizes[m - 1]}): {slope:.2f}")
+
+
+def _median_process_s(command, repeats=5):
+    walls = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        # From a neutral folder: ``-m`` puts the working directory first on sys.path.
+        subprocess.run(command, check=True, stdout=subprocess.DEVNULL, cwd=tempfile.gettempdir())
+        walls.append(time.perf_counter() - start)
+    return walls
+
+
+def bench_process():
+    """Whole-process times with warm caches: a paper ``dronefleet run``, bare imports, ``--help``."""
+    python = sys.executable
+    _median_process_s([python, "-m", "dronefleet.cli", "--help"], 1)  # warm the caches
+    with tempfile.TemporaryDirectory(prefix="dronefleet-bench-") as out:
+        run = [python, "-m", "dronefleet.cli", "run", "--out", str(Path(out) / "run"), "--overwrite"]
+        _median_process_s(run, 1)
+        print("whole processes, warm caches (median [min-max] of 5):")
+        print(f"  dronefleet run (paper config): {_span(_median_process_s(run), 2)} s")
+    print(f"  python -c 'import numpy, numba': {_span(_median_process_s([python, '-c', 'import numpy, numba']), 2)} s")
+    print(f"  dronefleet --help: {_span(_median_process_s([python, '-m', 'dronefleet.cli', '--help']), 2)} s")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="python -m dronefleet.delivery.bench", description=__doc__)
-    parser.add_argument("--runs", type=int, default=5, help="timed runs after compilation (default 5)")
+    parser.add_argument("--runs", type=int, default=5, help="timed paper runs after compilation (default 5)")
     parser.add_argument("--warm", action="store_true", help="use the existing numba cache instead of compiling")
+    parser.add_argument("--scaling", action="store_true", help="add the fleet-size table (25-1600 UAVs)")
+    parser.add_argument("--big", action="store_true", help="add 10,000 UAVs to the fleet-size table")
+    parser.add_argument("--process", action="store_true", help="add whole-process times (run, imports, --help)")
     parser.add_argument("--sweep", metavar="FILE", help="time this sweep instead, e.g. configs/sweeps/rules.toml")
     parser.add_argument("--jobs", type=int, help="local processes of --sweep (default: all CPUs)")
     args = parser.parse_args(argv)
@@ -47,31 +155,18 @@ def main(argv=None):
     if args.sweep:
         return bench_sweep(args.sweep, args.jobs, compile_s)
 
-    from .config import default_config, replace
-    from .simulation import simulate
-
-    config = default_config()  # 25 UAVs, 8 weeks, tau = 15 min, least_confident
     start = time.perf_counter()
     compile_engine()
     load_s = time.perf_counter() - start
-
-    walls, auctions = [], []
-    for seed in range(args.runs):
-        start = time.perf_counter()
-        result = simulate(replace(config, seed=seed))
-        walls.append(time.perf_counter() - start)
-        auctions.append(result.auctions)
+    print(f"Python {sys.version.split()[0]}; compile time (fresh process, empty cache): {compile_s:.1f} s; "
+          f"loading the compiled engine: {load_s:.2f} s")
+    bench_paper(args.runs)
+    if args.scaling or args.big:
+        bench_scaling({**SCALING_WEEKS, **(BIG_WEEKS if args.big else {})})
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
-
-    print(f"scenario: {config.n_uavs} UAVs, {config.horizon_weeks:g} weeks, tau = {config.tau_minutes:g} min, "
-          f"{config.rule}; {args.runs} runs (seeds 0..{args.runs - 1}), Python {sys.version.split()[0]}")
-    print(f"compile time (fresh process, empty cache): {compile_s:.1f} s; loading the compiled engine: {load_s:.2f} s")
-    print(f"wall s per run: median {statistics.median(walls):.3f}, min {min(walls):.3f}, max {max(walls):.3f}")
-    print(f"auctions per second: {statistics.median(a / w for a, w in zip(auctions, walls)):.3e} "
-          f"({statistics.median(auctions):.0f} auctions per run)")
     print(f"peak memory (max RSS of the process doing the runs): {peak_mb:.0f} MB")
-
-
+    if args.process:
+        bench_process()
 def bench_sweep(path, jobs, compile_s):
     """Run every run of the sweep file ``path`` on ``jobs`` processes into a temporary directory; print the times."""
     from ..sweep import available_cpus, load_sweep, run_sweep

@@ -38,7 +38,10 @@ OUTCOME_NAMES = ("in_flight", "delivered", "aborted")
 
 # Supervisor events the engine generates: columns of the compiled transition table.
 EVENT_NAMES = ("capableTask", "notCapableTask", "bid", "wonBid", "lostBid", "deliver", "condReturn", "return")
-EV_CAPABLE, EV_NOT_CAPABLE, EV_BID, EV_WON, EV_LOST_BID, EV_DELIVER, EV_COND_RETURN, EV_RETURN = range(8)
+# numpy integers, not Python ints: numba types a global Python int as a literal and would compile
+# _step and supervisor.take once per event.
+EV_CAPABLE, EV_NOT_CAPABLE, EV_BID, EV_WON, EV_LOST_BID, EV_DELIVER, EV_COND_RETURN, EV_RETURN = (
+    np.int64(event) for event in range(len(EVENT_NAMES)))
 
 # Status returned by ``advance``. INVALID_STATE: no event fits the state (e.g. a NaN event time
 # from non-finite input); the kernel stops rather than write anywhere.
@@ -59,6 +62,9 @@ SOC_MARGIN = 1e-12  # percent
 THRESHOLD_MARGIN = 1e-9  # relative, on 100 - SoC (see threshold_gap)
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
+# Queue position and membership changes, numpy integers for one compiled queued_at and _tree_add
+# (a Python int literal would be a specialisation of its own).
+OLDEST, QUEUED, TAKEN_OUT = np.int64(0), np.int64(1), np.int64(-1)
 #: Tick indices from here on stand for "never" (NO_TICK): k * interval is no longer exact
 #: for larger k, and no run processes 2^52 ticks.
 MAX_TICK = 2.0 ** 52
@@ -93,7 +99,12 @@ class OrderBook(NamedTuple):
     power_w: np.ndarray     # flight power carrying the parcel
     attempts: np.ndarray    # int32
     delivered_s: np.ndarray  # nan until delivered
-    queue: np.ndarray       # int64 ids of unallocated orders, ascending, first counters[QUEUE_LEN] valid
+    # The queue of unallocated orders, ascending ids (arrival order), counters[QUEUE_LEN] long:
+    # a Fenwick tree of membership counts over ids (queue_tree[id + 1]) finds the k-th order and
+    # the rank of an id in O(log n); queue_next links each queued order to the next (-1 after
+    # the last), so that a scan walks on in O(1) and an allocated order leaves in O(log n).
+    queue_tree: np.ndarray  # int64 (n + 1,)
+    queue_next: np.ndarray  # int64 (n,), valid for queued orders
 
 
 class Fleet(NamedTuple):
@@ -106,7 +117,9 @@ class Fleet(NamedTuple):
     steps: np.ndarray       # learner step counter (scikit-learn's t_)
     mode: np.ndarray        # int8
     sup: np.ndarray         # (S, K) local supervisor states
-    next_s: np.ndarray      # time of the UAV's next event, inf if none
+    next_s: np.ndarray      # time of the UAV's next event, inf if none; set only through ``schedule``
+    event_heap: np.ndarray  # int64: UAV ids in a binary min-heap on (next_s, id), NaN first (see ``schedule``)
+    heap_pos: np.ndarray    # int64: where each UAV sits in event_heap
     soc_ref: np.ndarray     # at the FC: SoC at t_ref, from which it charges
     t_ref: np.ndarray
     order: np.ndarray       # int64, order being flown, -1 if none
@@ -127,6 +140,7 @@ class Fleet(NamedTuple):
     reach: np.ndarray       # max over queued orders of w_distance x_distance + w_mass x_mass
     reach_stale: np.ndarray  # bool: reach must be recomputed before use
     x_soc_best: np.ndarray  # scratch of the tick scan: most favourable standardised SoC
+    scan_ids: np.ndarray    # int64 scratch of the tick scan: the idle UAVs
 
 
 class Attempts(NamedTuple):
@@ -204,33 +218,137 @@ def first_tick_at_or_after(t, interval):
 
 
 @njit(cache=True)
-def _order_value(book, fleet, i, order):
-    """The part of UAV ``i``'s decision function that depends on the order."""
-    return fleet.coef[i, 0] * book.x_distance[order] + fleet.coef[i, 1] * book.x_mass[order]
+def _order_value(coef, i, x_distance, x_mass):
+    """The part of UAV ``i``'s decision function that depends on the order (standardised features)."""
+    return coef[i, 0] * x_distance + coef[i, 1] * x_mass
+
+
+@njit(cache=True)
+def _earlier(next_s, a, b):
+    """Whether UAV ``a``'s next event comes before ``b``'s: by time, then by id, NaN first.
+
+    The same order as ``np.argmin(next_s)``, which returns the lowest id among the minima,
+    and the first NaN if there is one (so that ``advance`` reports INVALID_STATE).
+    """
+    ta = next_s[a]
+    tb = next_s[b]
+    if ta != ta:
+        return tb == tb or a < b
+    if tb != tb:
+        return False
+    return ta < tb or (ta == tb and a < b)
+
+
+@njit(cache=True)
+def schedule(fleet, i, t):
+    """Set UAV ``i``'s next event to ``t`` and move it to its place in the event heap (O(log S))."""
+    next_s = fleet.next_s
+    heap = fleet.event_heap
+    where = fleet.heap_pos
+    next_s[i] = t
+    n = heap.shape[0]
+    k = where[i]
+    while k > 0:  # up, while earlier than the parent
+        parent = (k - 1) >> 1
+        p = heap[parent]
+        if not _earlier(next_s, i, p):
+            break
+        heap[k] = p
+        where[p] = k
+        k = parent
+    while True:  # down, while a child is earlier
+        child = 2 * k + 1
+        if child >= n:
+            break
+        if child + 1 < n and _earlier(next_s, heap[child + 1], heap[child]):
+            child += 1
+        c = heap[child]
+        if not _earlier(next_s, c, i):
+            break
+        heap[k] = c
+        where[c] = k
+        k = child
+    heap[k] = i
+    where[i] = k
+
+
+@njit(cache=True)
+def _rank(tree, order):
+    """How many queued orders have an id <= ``order`` (0 for -1)."""
+    count = 0
+    k = order + 1
+    while k > 0:
+        count += tree[k]
+        k &= k - 1
+    return count
+
+
+@njit(cache=True)
+def queued_at(tree, k):
+    """The queued order at position ``k`` (0-based, ascending ids); ``k`` < the queue length."""
+    n = tree.shape[0] - 1
+    step = 1
+    while 2 * step <= n:
+        step *= 2
+    node = 0  # the answer is the smallest id whose rank is k + 1
+    left = k + 1
+    while step > 0:
+        if node + step <= n and tree[node + step] < left:
+            node += step
+            left -= tree[node]
+        step >>= 1
+    return node
+
+
+@njit(cache=True)
+def _tree_add(tree, order, delta):
+    """Add ``delta`` (1: queued, -1: taken out) to ``order``'s membership count."""
+    k = order + 1
+    while k < tree.shape[0]:
+        tree[k] += delta
+        k += k & -k
 
 
 @njit(cache=True)
 def _enqueue(book, fleet, counters, order):
     """Put ``order`` among the unallocated ones, at its place in arrival order."""
+    tree = book.queue_tree
+    link = book.queue_next
     n = counters[QUEUE_LEN]
-    pos = np.searchsorted(book.queue[:n], order)
-    book.queue[pos + 1:n + 1] = book.queue[pos:n].copy()
-    book.queue[pos] = order
+    before = _rank(tree, order)  # queued orders with a lower id
+    if before > 0:
+        previous = queued_at(tree, before - 1)
+        link[order] = link[previous]
+        link[previous] = order
+    else:
+        link[order] = queued_at(tree, OLDEST) if n > 0 else -1
+    _tree_add(tree, order, QUEUED)
     counters[QUEUE_LEN] = n + 1
-    for i in range(fleet.reach.shape[0]):
-        fleet.reach[i] = max(fleet.reach[i], _order_value(book, fleet, i, order))
+    coef = fleet.coef
+    reach = fleet.reach
+    x0 = book.x_distance[order]
+    x1 = book.x_mass[order]
+    for i in range(reach.shape[0]):
+        reach[i] = max(reach[i], _order_value(coef, i, x0, x1))
 
 
 @njit(cache=True)
 def _dequeue(book, fleet, counters, pos):
     """Take the order at queue position ``pos`` out of the queue."""
-    n = counters[QUEUE_LEN]
-    order = book.queue[pos]
-    book.queue[pos:n - 1] = book.queue[pos + 1:n].copy()
-    counters[QUEUE_LEN] = n - 1
-    for i in range(fleet.reach.shape[0]):
-        if _order_value(book, fleet, i, order) >= fleet.reach[i]:
-            fleet.reach_stale[i] = True
+    tree = book.queue_tree
+    order = queued_at(tree, pos)
+    if pos > 0:
+        book.queue_next[queued_at(tree, pos - 1)] = book.queue_next[order]
+    _tree_add(tree, order, TAKEN_OUT)
+    counters[QUEUE_LEN] -= 1
+    coef = fleet.coef
+    reach = fleet.reach
+    stale = fleet.reach_stale
+    x0 = book.x_distance[order]
+    x1 = book.x_mass[order]
+    for i in range(reach.shape[0]):
+        if _order_value(coef, i, x0, x1) >= reach[i]:
+            stale[i] = True
 
 
 @njit(cache=True)
@@ -276,8 +394,10 @@ def _earliest_bid(book, fleet, counters, params, t):
         else:
             if fleet.reach_stale[i]:
                 best = -np.inf
-                for q in range(counters[QUEUE_LEN]):
-                    best = max(best, _order_value(book, fleet, i, book.queue[q]))
+                order = queued_at(book.queue_tree, OLDEST) if counters[QUEUE_LEN] > 0 else -1
+                while order >= 0:
+                    best = max(best, _order_value(fleet.coef, i, book.x_distance[order], book.x_mass[order]))
+                    order = book.queue_next[order]
                 fleet.reach[i] = best
                 fleet.reach_stale[i] = False
             slack = fleet.reach[i] + fleet.intercept[i]
@@ -315,22 +435,35 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     t_end = end * interval  # after every scanned tick
     # Charging drives SoC up to 100 (t = inf), where a UAV that may reserve is keenest.
     t_keenest = np.inf if params.reserves else t_end
+    coef = fleet.coef
+    intercept = fleet.intercept
+    x_soc_best = fleet.x_soc_best
+    idle = fleet.scan_ids  # the idle UAVs, packed: the scan below touches only them
+    n_idle = 0
     for i in range(fleet.mode.shape[0]):
         if fleet.mode[i] == IDLE:
-            t_best = t_keenest if fleet.coef[i, 2] > 0.0 else t_tick
+            t_best = t_keenest if coef[i, 2] > 0.0 else t_tick
             soc = soc_after_charging(fleet.soc_ref[i], t_best - fleet.t_ref[i], params.charge_rate)
-            fleet.x_soc_best[i] = (soc + SOC_MARGIN - params.soc_mean) / params.soc_std
-    n = counters[QUEUE_LEN]
-    pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
+            x_soc_best[i] = (soc + SOC_MARGIN - params.soc_mean) / params.soc_std
+            idle[n_idle] = i
+            n_idle += 1
+    tree = book.queue_tree
+    link = book.queue_next
+    x_distance = book.x_distance
+    x_mass = book.x_mass
+    order = queued_at(tree, _rank(tree, counters[LAST_ADVERTISED]) % counters[QUEUE_LEN])
     for j in range(end - tick):
-        order = book.queue[(pos + j) % n]
-        for i in range(fleet.mode.shape[0]):
-            if fleet.mode[i] != IDLE:
-                continue
-            value = _order_value(book, fleet, i, order)
-            f = value + fleet.intercept[i] + fleet.coef[i, 2] * fleet.x_soc_best[i]
-            if f >= -F_MARGIN * (1.0 + abs(value) + abs(fleet.intercept[i])):
+        x0 = x_distance[order]
+        x1 = x_mass[order]
+        for k in range(n_idle):
+            i = idle[k]
+            value = _order_value(coef, i, x0, x1)
+            f = value + intercept[i] + coef[i, 2] * x_soc_best[i]
+            if f >= -F_MARGIN * (1.0 + abs(value) + abs(intercept[i])):
                 return tick + j
+        order = link[order]
+        if order < 0:  # past the newest: round again from the oldest
+            order = queued_at(tree, OLDEST)
     return end
 
 
@@ -361,9 +494,9 @@ def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     skipped = end - counters[NEXT_TICK]
     if skipped <= 0:
         return False
-    n = counters[QUEUE_LEN]
-    pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
-    counters[LAST_ADVERTISED] = book.queue[(pos + skipped - 1) % n]
+    tree = book.queue_tree
+    counters[LAST_ADVERTISED] = queued_at(tree, (_rank(tree, counters[LAST_ADVERTISED]) + skipped - 1)
+                                          % counters[QUEUE_LEN])
     counters[N_AUCTIONS] += skipped
     counters[NEXT_TICK] = end
     return True
@@ -402,7 +535,7 @@ def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
     fleet.land_soc[i] = land_soc
     fleet.delivers[i] = delivers
     fleet.lost[i] = lost
-    fleet.next_s[i] = t + outbound_s
+    schedule(fleet, i, t + outbound_s)
 
 
 @njit(cache=True)
@@ -429,12 +562,12 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         if not _step(table, fleet, counters, i, EV_COND_RETURN):
             return False
         fleet.mode[i] = RETURNING
-        fleet.next_s[i] = t + fleet.home_s[i]
+        schedule(fleet, i, t + fleet.home_s[i])
         return True
     # RETURNING: the flight ends.
     attempts.return_s[row] = t
     fleet.order[i] = -1
-    fleet.next_s[i] = np.inf
+    schedule(fleet, i, np.inf)
     if fleet.lost[i]:
         attempts.lost[row] = True
         attempts.return_soc[row] = 0.0
@@ -533,11 +666,10 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
     idle UAVs bid for later (:func:`_reservation_bids`): the lowest wait wins, and the
     winner waits at the FC.
     """
-    n = counters[QUEUE_LEN]
-    pos = np.searchsorted(book.queue[:n], counters[LAST_ADVERTISED], side="right")
-    if pos == n:
+    pos = _rank(book.queue_tree, counters[LAST_ADVERTISED])
+    if pos == counters[QUEUE_LEN]:
         pos = 0
-    order = book.queue[pos]
+    order = queued_at(book.queue_tree, pos)
     counters[N_AUCTIONS] += 1
     x0 = book.x_distance[order]
     x1 = book.x_mass[order]
@@ -546,14 +678,19 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
     best = -np.inf
     n_uavs = fleet.mode.shape[0]
     bidder = fleet.bidding
+    # Arrays bound once, and weights read by index: no array views made per UAV in this loop.
+    mode = fleet.mode
+    coef = fleet.coef
+    soc_ref = fleet.soc_ref
+    t_ref = fleet.t_ref
     for i in range(n_uavs):
         bidder[i] = False
-        if fleet.mode[i] != IDLE:
+        if mode[i] != IDLE:
             continue
-        soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
-        f = decision(fleet.coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
-        w = fleet.coef[i]
-        bids, score = bid(params.rule, f, np.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]), soc, params.theta, rng)
+        soc = soc_after_charging(soc_ref[i], t - t_ref[i], params.charge_rate)
+        f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
+        w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
+        bids, score = bid(params.rule, f, w_norm, soc, params.theta, rng)
         if not bids:
             # With reservations the UAV's step waits for the second phase.
             if not params.reserves and not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
@@ -593,7 +730,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
         fleet.mode[winner] = RESERVED
         fleet.order[winner] = order
         fleet.forecast_wait_s[winner] = best_wait
-        fleet.next_s[winner] = _reserved_takeoff(book, fleet, params, winner, order, t, best_wait)
+        schedule(fleet, winner, _reserved_takeoff(book, fleet, params, winner, order, t, best_wait))
         counters[N_RESERVED] += 1
         counters[N_RESERVATIONS] += 1
         return True
@@ -623,7 +760,7 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
     while True:
         if counters[N_ATTEMPTS] == capacity:
             return ATTEMPTS_FULL
-        uav = np.argmin(fleet.next_s)
+        uav = fleet.event_heap[0]
         t_uav = fleet.next_s[uav]
         t_order = book.arrival_s[counters[NEXT_ORDER]] if counters[NEXT_ORDER] < n_orders else np.inf
         t_sample = counters[NEXT_SAMPLE] * params.record_interval_s if counters[NEXT_SAMPLE] < n_samples else np.inf

@@ -100,8 +100,8 @@ def sgd_step(coef, intercept, t, i, x0, x1, x2, y, alpha, t0):
         UAV id (row).
     x0, x1, x2 : float
         Standardised distance, mass and SoC of the sample.
-    y : int or float
-        Label: 1 delivered, 0 aborted.
+    y : float
+        Label: 1.0 delivered, 0.0 aborted.
     alpha : float
         L2 regularisation strength.
     t0 : float
@@ -218,7 +218,7 @@ def initial_fit(n_uavs, mean, std, distance_range, mass_range, alpha, epochs, rn
         ]
     )
     X = standardise(raw, mean, std)
-    y = np.array([1, 0], dtype=np.int64)
+    y = np.array([1.0, 0.0])  # float, as the engine's labels: one compiled sgd_step
     orders = np.empty((n_uavs, epochs, 2), dtype=np.int64)
     for i in range(n_uavs):
         for e in range(epochs):

@@ -139,18 +139,21 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
         arrival_s=orders.arrival_s, distance_m=orders.distance_m,
         x_distance=np.ascontiguousarray(features[:, 0]), x_mass=np.ascontiguousarray(features[:, 1]),
         power_w=config_power(config, orders.mass_kg), attempts=np.zeros(n, np.int32),
-        delivered_s=np.full(n, np.nan), queue=np.zeros(n, np.int64))
+        delivered_s=np.full(n, np.nan), queue_tree=np.zeros(n + 1, np.int64),
+        queue_next=np.full(n, -1, np.int64))
     fleet = engine.Fleet(
         soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,
         mode=np.where(lost, engine.LOST, engine.IDLE).astype(np.int8),
         sup=np.tile(automaton.init_state.astype(np.int64), (s, 1)),
-        next_s=np.full(s, np.inf), soc_ref=soc.astype(np.float64), t_ref=np.zeros(s),
+        next_s=np.full(s, np.inf), event_heap=np.arange(s, dtype=np.int64),
+        heap_pos=np.arange(s, dtype=np.int64), soc_ref=soc.astype(np.float64), t_ref=np.zeros(s),
         order=np.full(s, -1, np.int64), attempt=np.full(s, -1, np.int64),
         takeoff_s=np.zeros(s), takeoff_soc=np.zeros(s), rate_out=np.zeros(s), turn_s=np.zeros(s),
         turn_soc=np.zeros(s), rate_home=np.zeros(s), home_s=np.zeros(s), land_soc=np.zeros(s),
         delivers=np.zeros(s, np.bool_), lost=np.zeros(s, np.bool_), allocated_s=np.zeros(s),
         forecast_wait_s=np.full(s, np.nan), bidding=np.zeros(s, np.bool_),
-        reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), x_soc_best=np.zeros(s))
+        reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), x_soc_best=np.zeros(s),
+        scan_ids=np.zeros(s, np.int64))
     n_samples = int(math.floor(config.horizon_s / config.record_interval_s)) + 1
     series = engine.Series(*(np.zeros(n_samples, np.int64) for _ in engine.Series._fields))
     counters = np.zeros(engine.N_COUNTERS, np.int64)

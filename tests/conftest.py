@@ -110,3 +110,32 @@ def every_tick_rules():
         auction.RULES.pop(copy, None)
 
 
+# A tiny sweep of each registered scenario (a new scenario must add one): 4 runs, 2 per task.
+TINY_SWEEPS = {
+    "delivery": """
+[sweep]
+name = "tiny"
+seeds = [0, 1]
+runs_per_task = 2
+[set]
+horizon_weeks = 0.02
+n_uavs = 3
+[grid]
+rule = ["least_confident", "random"]
+""",
+    "replenishment": """
+[sweep]
+name = "tiny"
+scenario = "replenishment"
+runs_per_task = 2
+[set]
+trials = 2
+ticks = 200
+[[grid]]
+strategy = ["fixed"]
+n_chargers = [0]
+[[grid]]
+strategy = ["mobile"]
+n_chargers = [1, 2, 3]
+""",
+}

@@ -11,37 +11,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from conftest import TINY_SWEEPS as TINY
 from dronefleet import cli, scenarios, sweep as sw
 
-# A tiny sweep of each registered scenario (a new scenario must add one): 4 runs, 2 per task.
-TINY = {
-    "delivery": """
-[sweep]
-name = "tiny"
-seeds = [0, 1]
-runs_per_task = 2
-[set]
-horizon_weeks = 0.02
-n_uavs = 3
-[grid]
-rule = ["least_confident", "random"]
-""",
-    "replenishment": """
-[sweep]
-name = "tiny"
-scenario = "replenishment"
-runs_per_task = 2
-[set]
-trials = 2
-ticks = 200
-[[grid]]
-strategy = ["fixed"]
-n_chargers = [0]
-[[grid]]
-strategy = ["mobile"]
-n_chargers = [1, 2, 3]
-""",
-}
 ARROW_TYPES = {float: pa.float64(), int: pa.int64(), str: pa.string()}
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from conftest import TINY_SWEEPS
 from dronefleet import cli
 from dronefleet.delivery.records import TABLES
 from dronefleet.scenarios import SCENARIOS
@@ -79,26 +80,10 @@ def test_the_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkey
     assert len(table_files(local)) == len(TABLES) * 8
 
 
-REPLENISHMENT = """[sweep]
-name = "tiny"
-scenario = "replenishment"
-runs_per_task = 2
-[set]
-trials = 2
-ticks = 200
-[[grid]]
-strategy = ["fixed"]
-n_chargers = [0]
-[[grid]]
-strategy = ["mobile"]
-n_chargers = [1, 2, 3]
-"""
-
-
 def test_a_replenishment_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     path = tmp_path / "tiny.toml"
-    path.write_text(REPLENISHMENT)
+    path.write_text(TINY_SWEEPS["replenishment"])
     assert cli.main(["sweep", "plan", str(path), "--results", "slurm"]) == 0
     try:
         job = subprocess.run(["sbatch", "--wait", str(tmp_path / "slurm" / "tiny" / "tiny.sbatch")], env=slurm,

@@ -127,7 +127,7 @@ def run(args):
 
     print(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
           f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
-          "(the first run on a machine compiles the engine, ~15 s)", flush=True)
+          "(the first run on a machine compiles the engine, ~30 s)", flush=True)
     start = time.perf_counter()
     try:
         result = simulate(config, progress=ProgressBar(config.horizon_s), fleet=fleet)

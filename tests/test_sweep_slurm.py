@@ -48,23 +48,29 @@ def slurm():
         subprocess.run(["bash", str(CLUSTER), "stop", str(STATE)], timeout=120)
 
 
-def table_files(out):
-    return {p.relative_to(out): p.read_bytes() for table in TABLES for p in sorted((out / table).rglob("*.parquet"))}
+def table_files(out, tables=TABLES):
+    return {p.relative_to(out): p.read_bytes() for table in tables for p in sorted((out / table).rglob("*.parquet"))}
+
+
+def submit(slurm, out):
+    """``sbatch --wait`` the job-array script that `sweep plan` wrote into the dataset ``out``;
+    its tasks' logs, after asserting that the array succeeded."""
+    try:
+        job = subprocess.run(["sbatch", "--wait", str(out / f"{out.name}.sbatch")], env=slurm, capture_output=True,
+                             text=True, timeout=600)
+    except subprocess.TimeoutExpired:
+        subprocess.run(["scancel", f"--name=dronefleet-{out.name}"], env=slurm)
+        raise
+    logs = sorted((out / "_logs").glob("*.out"))
+    printed = "".join(f"--- {log.name}\n{log.read_text()}" for log in logs)
+    assert job.returncode == 0, f"{job.stdout}{job.stderr}\n{printed}"
+    return logs, printed
 
 
 def test_the_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["sweep", "plan", str(SMOKE), "--results", "slurm"]) == 0
-    script = tmp_path / "slurm" / "smoke" / "smoke.sbatch"
-    try:
-        job = subprocess.run(["sbatch", "--wait", str(script)], env=slurm, capture_output=True, text=True,
-                             timeout=600)
-    except subprocess.TimeoutExpired:
-        subprocess.run(["scancel", "--name=dronefleet-smoke"], env=slurm)
-        raise
-    logs = sorted((tmp_path / "slurm" / "smoke" / "_logs").glob("*.out"))
-    printed = "".join(f"--- {log.name}\n{log.read_text()}" for log in logs)
-    assert job.returncode == 0, f"{job.stdout}{job.stderr}\n{printed}"
+    logs, printed = submit(slurm, tmp_path / "slurm" / "smoke")
     assert len(logs) == 3 and printed.count("ran 3, skipped 0") == 2 and "ran 2, skipped 0" in printed
 
     assert cli.main(["sweep", "run", str(SMOKE), "--results", "local", "--jobs", "2"]) == 0
@@ -85,15 +91,7 @@ def test_a_replenishment_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_
     path = tmp_path / "tiny.toml"
     path.write_text(TINY_SWEEPS["replenishment"])
     assert cli.main(["sweep", "plan", str(path), "--results", "slurm"]) == 0
-    try:
-        job = subprocess.run(["sbatch", "--wait", str(tmp_path / "slurm" / "tiny" / "tiny.sbatch")], env=slurm,
-                             capture_output=True, text=True, timeout=600)
-    except subprocess.TimeoutExpired:
-        subprocess.run(["scancel", "--name=dronefleet-tiny"], env=slurm)
-        raise
-    logs = sorted((tmp_path / "slurm" / "tiny" / "_logs").glob("*.out"))
-    printed = "".join(f"--- {log.name}\n{log.read_text()}" for log in logs)
-    assert job.returncode == 0, f"{job.stdout}{job.stderr}\n{printed}"
+    logs, printed = submit(slurm, tmp_path / "slurm" / "tiny")
     assert len(logs) == 2 and printed.count("ran 2, skipped 0") == 2
 
     assert cli.main(["sweep", "run", str(path), "--results", "local", "--jobs", "2"]) == 0
@@ -102,7 +100,6 @@ def test_a_replenishment_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_
     on_slurm, local = tmp_path / "slurm" / "tiny", tmp_path / "local" / "tiny"
     assert len(pd.read_parquet(on_slurm / "collected.parquet")) == 4 * 2  # a row per trial
     tables = SCENARIOS["replenishment"].tables
-    files = {p.relative_to(local): p.read_bytes() for t in tables for p in sorted((local / t).rglob("*.parquet"))}
-    assert {p.relative_to(on_slurm): p.read_bytes() for t in tables
-            for p in sorted((on_slurm / t).rglob("*.parquet"))} == files
+    files = table_files(local, tables)
+    assert table_files(on_slurm, tables) == files
     assert len(files) == len(tables) * 4

@@ -145,13 +145,17 @@ def main(argv=None):
     parser.add_argument("--sweep", metavar="FILE", help="time this sweep instead, e.g. configs/sweeps/rules.toml")
     parser.add_argument("--jobs", type=int, help="local processes of --sweep (default: all CPUs)")
     args = parser.parse_args(argv)
-    compile_s = float("nan")
-    if not args.warm:
-        # Set before numba is imported here and in the child, which fills the cache.
-        os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="dronefleet-bench-")
+    if args.warm:
+        return _bench(args, float("nan"))
+    # A fresh, empty numba cache, set before numba is imported here and in the child that fills it.
+    with tempfile.TemporaryDirectory(prefix="dronefleet-bench-cache-") as cache:
+        os.environ["NUMBA_CACHE_DIR"] = cache
         start = time.perf_counter()
         subprocess.run([sys.executable, "-c", "import dronefleet.delivery.bench as b; b.compile_engine()"], check=True)
-        compile_s = time.perf_counter() - start
+        _bench(args, time.perf_counter() - start)
+
+
+def _bench(args, compile_s):
     if args.sweep:
         return bench_sweep(args.sweep, args.jobs, compile_s)
 
@@ -167,6 +171,8 @@ def main(argv=None):
     print(f"peak memory (max RSS of the process doing the runs): {peak_mb:.0f} MB")
     if args.process:
         bench_process()
+
+
 def bench_sweep(path, jobs, compile_s):
     """Run every run of the sweep file ``path`` on ``jobs`` processes into a temporary directory; print the times."""
     from ..sweep import available_cpus, load_sweep, run_sweep

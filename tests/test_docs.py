@@ -3,10 +3,7 @@
 import re
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
-DOCS = ("delivery-model.md", "delivery-experiments.md", "replenishment-model.md")
 CITATION = re.compile(r"docs/([\w-]+\.md)(?: sections? (\d+(?:\.\d+)?(?:(?:, | and |-)\d+(?:\.\d+)?)*))?")
 CITING = ("README.md", "CONTRIBUTING.md", "dronefleet/**/*.py", "dronefleet/**/*.toml", "configs/**/*.toml",
           "tests/**/*.py", "tests/**/*.md", "experiments/*", "results/README.md")
@@ -51,8 +48,13 @@ def test_sections_parse_headings_and_section_11_items():
     assert sections(text) == {"4", "11", "11.1", "11.2", "5.2"}
 
 
-@pytest.mark.parametrize("cited_from, doc, numbers", list(citations()))
-def test_every_citation_names_a_section_that_exists(cited_from, doc, numbers):
-    assert doc in DOCS, f"{cited_from} cites docs/{doc}, which does not exist"
-    missing = set(numbers) - sections((ROOT / "docs" / doc).read_text(encoding="utf-8"))
-    assert not missing, f"{cited_from} cites docs/{doc} section(s) {sorted(missing)}, which do not exist"
+def test_every_citation_names_a_section_that_exists():
+    wrong = []
+    for cited_from, doc, numbers in citations():
+        if not (ROOT / "docs" / doc).is_file():
+            wrong.append(f"{cited_from}: docs/{doc} does not exist")
+            continue
+        missing = set(numbers) - sections((ROOT / "docs" / doc).read_text(encoding="utf-8"))
+        if missing:
+            wrong.append(f"{cited_from}: docs/{doc} has no section {', '.join(sorted(missing))}")
+    assert not wrong, "\n".join(wrong)

@@ -1,0 +1,60 @@
+"""Citations of the model descriptions ("docs/delivery-model.md section 7") point at sections that exist."""
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CITATION = re.compile(r"docs/([\w-]+\.md)(?: sections? (\d+(?:\.\d+)?(?:(?:, | and |-)\d+(?:\.\d+)?)*))?")
+CITING = ("README.md", "CONTRIBUTING.md", "dronefleet/**/*.py", "dronefleet/**/*.toml", "configs/**/*.toml",
+          "tests/**/*.py", "tests/**/*.md", "experiments/*", "results/README.md")
+
+
+def sections(text):
+    """Section numbers of a model description: "## N." and "### N.M" headings, and the items of
+    section 11's numbered list as "11.K"."""
+    found, current = set(), None
+    for line in text.splitlines():
+        heading = re.match(r"#{2,3} (\d+(?:\.\d+)?)\.? ", line)
+        if heading:
+            current = heading.group(1)
+            found.add(current)
+        elif line.startswith("## "):
+            current = None
+        elif current == "11" and (item := re.match(r"(\d+)\. ", line)):
+            found.add(f"11.{item.group(1)}")
+    return found
+
+
+def citations():
+    """(citing file, cited doc, cited section numbers) for every citation in the repository."""
+    for pattern in CITING:
+        for path in sorted(ROOT.glob(pattern)):
+            if path.is_file() and path.resolve() != Path(__file__).resolve():
+                for match in CITATION.finditer(path.read_text(encoding="utf-8")):
+                    numbers = re.split(r", | and |-", match.group(2)) if match.group(2) else []
+                    yield path.relative_to(ROOT).as_posix(), match.group(1), numbers
+
+
+def test_model_descriptions_keep_the_numbering_the_code_cites():
+    delivery = sections((ROOT / "docs" / "delivery-model.md").read_text(encoding="utf-8"))
+    replenishment = sections((ROOT / "docs" / "replenishment-model.md").read_text(encoding="utf-8"))
+    assert {str(n) for n in range(1, 12)} <= delivery
+    assert {str(n) for n in range(1, 12)} | {"5.1", "5.2", "5.3", "5.4"} <= replenishment
+    assert {f"11.{k}" for k in range(1, 16)} <= replenishment
+
+
+def test_sections_parse_headings_and_section_11_items():
+    text = "## 4. Motion\n1. not an item\n## 11. Ambiguities\n1. **Rate.**\n2. **Bias.**\n### 5.2 Events\n"
+    assert sections(text) == {"4", "11", "11.1", "11.2", "5.2"}
+
+
+def test_every_citation_names_a_section_that_exists():
+    wrong = []
+    for cited_from, doc, numbers in citations():
+        if not (ROOT / "docs" / doc).is_file():
+            wrong.append(f"{cited_from}: docs/{doc} does not exist")
+            continue
+        missing = set(numbers) - sections((ROOT / "docs" / doc).read_text(encoding="utf-8"))
+        if missing:
+            wrong.append(f"{cited_from}: docs/{doc} has no section {', '.join(sorted(missing))}")
+    assert not wrong, "\n".join(wrong)

@@ -293,8 +293,8 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     head: dict[str, Any] = {"name": "api"}
     if path is None:
         head["scenario"] = scenario.name
-    else:  # absolute: the machinery reads a base relative to the sweep file, which has no folder here
-        head["base"] = os.path.abspath(path)
+    else:  # relative to the folder of SWEEP_LABEL, which is the working directory
+        head["base"] = os.fspath(path)
     if seeds is not None:
         head["seeds"] = _seed_list(seeds)
     if set is not None and not isinstance(set, Mapping):

@@ -15,7 +15,7 @@ from . import api
 from . import sweep as _sweep_machinery
 from .api import Run, run
 
-__all__ = ["Run", "run", "sweep", "__version__"]
+__all__ = ["Run", "__version__", "run", "sweep"]
 
 
 class _CallableModule(ModuleType):

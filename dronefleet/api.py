@@ -117,11 +117,11 @@ class Run:
         return {name: self.table(name) for name in self.arrow}
 
     def __getattr__(self, name: str) -> pandas.DataFrame:
-        # only for names that are not attributes: the scenario's tables, from its contract
-        if name.startswith("_") or name not in self.__dict__.get("arrow", ()):
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}"
-                                 + (f" (the tables of this {self.scenario.name} run: {', '.join(self.arrow)})"
-                                    if "arrow" in self.__dict__ else ""))
+        # only for names that are not attributes: the tables, by the names the scenario gives them
+        arrow = self.__dict__.get("arrow", {})  # empty while a copy or an unpickling builds the object
+        if name not in arrow:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}; its tables: "
+                                 f"{', '.join(arrow)}")
         return self.table(name)
 
     def __dir__(self) -> list[str]:
@@ -201,6 +201,11 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
         (a ValueError) An unknown scenario, an unreadable config file, an unknown key, a key
         given twice, a value of the wrong type or out of range, a run too large: before
         anything is simulated.
+    RuntimeError
+        A delivery run that stopped: a degenerate config whose UAVs keep aborting
+        (:class:`dronefleet.delivery.simulation.RunTooLargeError`), a supervisor that refuses
+        an event (:class:`dronefleet.supervisor.SupervisorError`); ``dronefleet run`` reports
+        the same in one line.
 
     Examples
     --------

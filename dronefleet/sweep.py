@@ -1,5 +1,8 @@
 """Parameter sweeps: a grid of config values times seeds, one hive-partitioned dataset, for any scenario.
 
+Called, this module is :func:`dronefleet.api.sweep`: ``dronefleet.sweep(grid, seeds=...)`` runs
+a sweep from Python, without a file, and returns its summaries as a pandas DataFrame.
+
 A sweep file is TOML (``configs/sweeps/``). A delivery sweep::
 
     [sweep]

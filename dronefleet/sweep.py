@@ -1,5 +1,8 @@
 """Parameter sweeps: a grid of config values times seeds, one hive-partitioned dataset, for any scenario.
 
+Called, this module is :func:`dronefleet.api.sweep`: ``dronefleet.sweep(grid, seeds=...)`` runs
+a sweep from Python, without a file, and returns its summaries as a pandas DataFrame.
+
 A sweep file is TOML (``configs/sweeps/``). A delivery sweep::
 
     [sweep]
@@ -339,6 +342,14 @@ def load_sweep(path, changes=None, seeds=None) -> Sweep:
         text, doc = read_toml(path, "sweep file")
     except ConfigError as error:
         raise SweepError(str(error)) from None
+    return sweep_of_document(doc, path, text, changes, seeds)
+
+
+def sweep_of_document(doc: dict, path: Path, text: str, changes=None, seeds=None) -> Sweep:
+    """:func:`load_sweep` of a sweep file's TOML document ``doc``, already read (or built in
+    memory, as :func:`dronefleet.api.sweep` does): ``path`` names it in messages, gives the
+    default name (its stem) and the folder ``[sweep] base`` is relative to; ``text`` is kept
+    in ``collected.parquet``. Raises SweepError as :func:`load_sweep` does."""
     _check_names(doc, _SECTIONS, f"{path}: sections")
     head = doc.get("sweep", {})
     if not isinstance(head, dict):

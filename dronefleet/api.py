@@ -1,0 +1,316 @@
+"""The Python API: :func:`run` one simulation, :func:`sweep` a grid of them, for any scenario.
+
+Both are exported at the package top level (``dronefleet.run``, ``dronefleet.sweep``) and go
+through the scenario contract (:mod:`dronefleet.scenarios`) and the machinery of the command
+line: :func:`run` is ``dronefleet run`` (its :meth:`Run.save` writes the same bytes as
+``dronefleet run --out``), :func:`sweep` is a sweep file planned, run and collected by
+:mod:`dronefleet.sweep`, built from the arguments instead of a TOML file.
+
+Configs and changes are given as on the command line. ``config`` (``base`` of a sweep) is
+None (the paper's delivery scenario), a registered scenario's name (its defaults:
+``"replenishment"``) or the path of a TOML config file. Changes are config keys, bare
+(``tau_minutes=20``, ``rule="random"``) or, in the ``set`` dict, also as ``section.key``
+(``set={"auction.rule": "random"}``); values have the types of a config file (an int is
+taken for a float, never the reverse). ``seed`` / ``seeds`` set the scenario's seed key
+(delivery ``seed``; replenishment ``first_trial``: a run holds trials ``first_trial`` ..
+``first_trial + trials - 1``). Bad arguments raise :class:`dronefleet.config.ConfigError`
+(a ``ValueError``) with a one-line message naming the value and what is allowed, before
+anything is simulated.
+
+Importing this module is cheap: pandas, numpy and the simulators are imported when a run
+or a table is asked for.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from . import scenarios
+from .config import ConfigError, _show
+from .scenarios import Scenario
+from .sweep import available_cpus, collect, run_sweep, sweep_of_document
+
+if TYPE_CHECKING:
+    import pandas
+    import pyarrow
+
+__all__ = ["Run", "run", "sweep"]
+
+#: How :func:`sweep` names its definition in messages (where a sweep file's path would be).
+SWEEP_LABEL = "dronefleet.sweep()"
+
+
+def _source(config: Any, argument: str) -> tuple[Scenario, str | os.PathLike | None]:
+    """``(scenario, config file or None)`` of a ``config``/``base`` argument (see the module doc)."""
+    if config is None:
+        return scenarios.SCENARIOS["delivery"], None
+    if isinstance(config, str) and config in scenarios.SCENARIOS:
+        return scenarios.SCENARIOS[config], None
+    if not isinstance(config, (str, os.PathLike)):
+        raise ConfigError(f"{argument}={_show(config)}: expected None, a scenario name "
+                          f"({', '.join(map(repr, scenarios.SCENARIOS))}) or the path of a TOML config file")
+    return scenarios.scenario_of(config), config
+
+
+def _changes(scenario: Scenario, fixed: Mapping[str, Any] | None, overrides: Mapping[str, Any],
+             seed: int | None) -> dict[str, Any]:
+    """``set`` and keyword changes (and ``seed``) -> ``{parameter name: value}``; a key given twice is refused."""
+    if fixed is not None and not isinstance(fixed, Mapping):
+        raise ConfigError(f"set={_show(fixed)}: expected a dict of config keys to values, "
+                          "e.g. set={'auction.rule': 'random'}")
+    given = [*(fixed or {}).items(), *overrides.items()]
+    if seed is not None:
+        given.append((scenario.seed_key, seed))
+    changes: dict[str, Any] = {}
+    for key, value in given:
+        if not isinstance(key, str):
+            raise ConfigError(f"config key {_show(key)} is not a string: keys are names such as 'tau_minutes' "
+                              "or 'orders.tau_minutes'")
+        name = scenario.resolve_key(key)  # ConfigError listing the allowed keys
+        if name in changes:
+            raise ConfigError(f"{name} is given twice (as {key!r} and before, in set, a keyword or seed)", [name])
+        changes[name] = value
+    return changes
+
+
+class Run:
+    """One simulated run: its config and its tables.
+
+    Every table of the scenario (``scenario.tables``) is an attribute holding a pandas
+    DataFrame, converted when first asked for: a delivery run has ``.orders``,
+    ``.attempts``, ``.fleet``, ``.timeseries`` and ``.summary`` (one row of metrics); an
+    energy-replenishment run ``.summary`` (one row per trial) and ``.timeseries``. Their
+    columns and units are documented in :mod:`dronefleet.delivery.records` and
+    :mod:`dronefleet.replenishment.simulate`.
+
+    Attributes
+    ----------
+    scenario : dronefleet.scenarios.Scenario
+        The run's scenario (``scenario.name``: ``"delivery"``, ``"replenishment"``).
+    config
+        The resolved, validated config (``config.to_dict()``: as sections of a config file).
+    arrow : dict of str to pyarrow.Table
+        The tables as the simulation made them, which :meth:`save` writes.
+    """
+
+    def __init__(self, scenario: Scenario, config: Any, arrow: dict[str, pyarrow.Table]):
+        self.scenario, self.config, self.arrow = scenario, config, arrow
+        self._frames: dict[str, pandas.DataFrame] = {}
+
+    def table(self, name: str) -> pandas.DataFrame:
+        """The table ``name`` as a pandas DataFrame (the same object on every call)."""
+        if name not in self.arrow:
+            raise ConfigError(f"no table {_show(name)} in a {self.scenario.name} run; "
+                              f"its tables: {', '.join(self.arrow)}")
+        if name not in self._frames:
+            self._frames[name] = self.arrow[name].to_pandas()
+        return self._frames[name]
+
+    @property
+    def tables(self) -> dict[str, pandas.DataFrame]:
+        """Every table by name, as pandas DataFrames."""
+        return {name: self.table(name) for name in self.arrow}
+
+    def __getattr__(self, name: str) -> pandas.DataFrame:
+        # only for names that are not attributes: the tables, by the names the scenario gives them
+        arrow = self.__dict__.get("arrow", {})  # empty while a copy or an unpickling builds the object
+        if name not in arrow:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}; its tables: "
+                                 f"{', '.join(arrow)}")
+        return self.table(name)
+
+    def __dir__(self) -> list[str]:
+        return [*super().__dir__(), *self.arrow]
+
+    def __repr__(self) -> str:
+        return f"<dronefleet {self.scenario.name} run: {self.scenario.describe(self.config)}>"
+
+    def report(self) -> str:
+        """The summary that ``dronefleet run`` prints (without the wall time)."""
+        return self.scenario.format_summary(self.arrow)
+
+    def save(self, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
+        """Write the run folder ``out`` exactly as ``dronefleet run --out out`` does (same bytes).
+
+        One parquet file per table, each with the config and provenance in its metadata;
+        the folder is written complete or not at all.
+
+        Parameters
+        ----------
+        out : path
+            The run folder: absent, empty or (with ``overwrite``) holding a run.
+        overwrite : bool
+            Replace a run already in ``out``; without it that is refused before anything is written.
+
+        Returns
+        -------
+        pathlib.Path
+            ``out``.
+
+        Raises
+        ------
+        dronefleet.outputs.OutputError
+            (a ConfigError) ``out`` cannot take the run: a file, a folder of other files, a
+            run without ``overwrite``, not writable, or a write that failed.
+        """
+        from .cli import check_outputs
+        from .outputs import writing
+        from .records import write_tables
+
+        out = Path(os.path.normpath(out))
+        check_outputs(out, None, overwrite, self.scenario.tables)
+        with writing(out):
+            write_tables(self.arrow, out, self.config, overwrite=overwrite)
+        return out
+
+
+def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
+        set: Mapping[str, Any] | None = None, **overrides: Any) -> Run:
+    """Simulate one run and return its tables.
+
+    Parameters
+    ----------
+    config : str, path or None
+        None: the paper's delivery scenario (``configs/paper.toml``); a scenario's name
+        (``"delivery"``, ``"replenishment"``): its defaults; else a TOML config file of any
+        scenario (it names its own).
+    seed : int, optional
+        The scenario's seed key: delivery's ``seed`` (all randomness derives from it,
+        0 .. 2**63 - 1), replenishment's ``first_trial`` (trial k uses seed 876 k).
+        Default: the config's (delivery 0, replenishment 1).
+    set : dict, optional
+        Config changes whose keys are not Python names: ``{"auction.rule": "random"}``.
+    **overrides
+        Config changes by bare key, as ``dronefleet run --set`` takes them:
+        ``tau_minutes=20`` (minutes), ``horizon_weeks=1`` (weeks), ``rule="random"``.
+
+    Returns
+    -------
+    Run
+        ``.config``, ``.tables``, each table as an attribute (``.orders``, ``.summary``, ...)
+        and ``.save(dir)``.
+
+    Raises
+    ------
+    dronefleet.config.ConfigError
+        (a ValueError) An unknown scenario, an unreadable config file, an unknown key, a key
+        given twice, a value of the wrong type or out of range, a run too large: before
+        anything is simulated.
+    RuntimeError
+        A delivery run that stopped: a degenerate config whose UAVs keep aborting
+        (:class:`dronefleet.delivery.simulation.RunTooLargeError`), a supervisor that refuses
+        an event (:class:`dronefleet.supervisor.SupervisorError`); ``dronefleet run`` reports
+        the same in one line.
+
+    Examples
+    --------
+    >>> import dronefleet
+    >>> r = dronefleet.run(seed=3, horizon_weeks=0.1, n_uavs=5, rule="random")
+    >>> r.config.rule, r.config.seed, len(r.summary)
+    ('random', 3, 1)
+    >>> dronefleet.run("replenishment", trials=2, ticks=300).summary.trial.tolist()
+    [1, 2]
+    """
+    scenario, path = _source(config, "config")
+    changes = _changes(scenario, set, overrides, seed)
+    resolved = scenario.replace(scenario.load(path), changes)
+    return Run(scenario, resolved, scenario.simulate(resolved))
+
+
+def _grid(grid: Any) -> dict | list[dict]:
+    """A ``grid`` argument as a sweep file's ``[grid]`` (one dict) or ``[[grid]]`` (a list of
+    dicts): tuples and ranges of values become lists; the machinery checks the rest."""
+    def product(table):
+        if not isinstance(table, Mapping):
+            raise ConfigError(f"grid={_show(grid)}: expected a dict of config keys to lists of values, "
+                              "e.g. {'rule': ['least_confident', 'random']}, or a list of such dicts")
+        return {key: list(values) if isinstance(values, (tuple, range)) else values for key, values in table.items()}
+
+    return [product(table) for table in grid] if isinstance(grid, list) else product(grid)
+
+
+def _seed_list(seeds: Any) -> list:
+    if isinstance(seeds, (str, bytes, Mapping)) or not isinstance(seeds, Iterable):
+        raise ConfigError(f"seeds={_show(seeds)}: expected a list of integers, e.g. [0, 1] or range(20)")
+    return list(seeds)
+
+
+def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds: Iterable[int] | None = None,
+          base: str | os.PathLike | None = None, set: Mapping[str, Any] | None = None,
+          jobs: int | None = None) -> pandas.DataFrame:
+    """Run every configuration of ``grid`` times ``seeds``; return their summaries, one table.
+
+    The sweep a sweep file with these ``[grid]``, ``[set]``, ``seeds`` and ``base`` would
+    be (see :mod:`dronefleet.sweep`), planned, run and collected in a temporary folder that
+    is removed afterwards: every run's config is validated before the first one starts.
+
+    Parameters
+    ----------
+    grid : dict or list of dicts
+        Config keys (bare or ``section.key``) to lists of values: the runs are their
+        product, the last key varying fastest, as ``[grid]``. A list of such dicts is
+        ``[[grid]]``: the union of their products, in order.
+    seeds : iterable of int, optional
+        Values of the scenario's seed key, one run per value and configuration (innermost).
+        Required for delivery (``seed``); for replenishment they are first trials
+        (``first_trial``), optional: without them each configuration is one run of trials
+        1 .. ``trials``.
+    base : str, path or None
+        The config the grid changes, as ``config`` of :func:`run`: None (the paper's
+        delivery scenario), a scenario's name or a TOML config file.
+    set : dict, optional
+        Fixed changes to ``base`` for every run (``[set]``), e.g. ``{"horizon_weeks": 1}``.
+    jobs : int, optional
+        Processes of this machine to run on (default: every CPU this process may use).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``dronefleet sweep collect``'s table: per run (replenishment: per trial of each run)
+        its grid values, its seed key, then its summary's columns; in run order.
+
+    Raises
+    ------
+    dronefleet.sweep.SweepError
+        (a ConfigError, a ValueError) Bad arguments: an unknown key, an empty grid, a value
+        given twice, a key both in ``grid`` and ``set``, missing or repeated seeds, any
+        value the scenario refuses (the message names the key, the grid point and what is
+        allowed); before anything runs.
+    RuntimeError
+        If a run failed while running (its error in the message).
+
+    Examples
+    --------
+    >>> import dronefleet
+    >>> table = dronefleet.sweep({"rule": ["least_confident", "random"]}, seeds=[0, 1], jobs=1,
+    ...                          set={"horizon_weeks": 0.1, "n_uavs": 5})
+    >>> table[["rule", "seed"]].values.tolist()
+    [['least_confident', 0], ['least_confident', 1], ['random', 0], ['random', 1]]
+    """
+    scenario, path = _source(base, "base")
+    if jobs is not None and (not isinstance(jobs, int) or isinstance(jobs, bool) or jobs < 1):
+        raise ConfigError(f"jobs={_show(jobs)}: expected an integer >= 1 (processes), or None for every CPU")
+    head: dict[str, Any] = {"name": "api"}
+    if path is None:
+        head["scenario"] = scenario.name
+    else:  # relative to the folder of SWEEP_LABEL, which is the working directory
+        head["base"] = os.fspath(path)
+    if seeds is not None:
+        head["seeds"] = _seed_list(seeds)
+    if set is not None and not isinstance(set, Mapping):
+        raise ConfigError(f"set={_show(set)}: expected a dict of config keys to values, e.g. {{'horizon_weeks': 1}}")
+    document = {"sweep": head, "set": dict(set or {}), "grid": _grid(grid)}
+    planned = sweep_of_document(document, Path(SWEEP_LABEL), json.dumps(document, default=str))
+    with tempfile.TemporaryDirectory(prefix="dronefleet-sweep-") as folder:
+        out = Path(folder) / planned.name
+        _, failures = run_sweep(planned, out, planned.runs, jobs or available_cpus())
+        if failures:
+            shown = "; ".join(f"{run.partition}: {error}" for run, error in list(failures.items())[:3])
+            raise RuntimeError(f"{len(failures)} of {len(planned.runs)} runs failed: {shown}")
+        table, _ = collect(planned, out)
+    return table.to_pandas()

@@ -1,0 +1,163 @@
+"""The Python API (``dronefleet.run``, ``dronefleet.sweep``): the README's examples run, a saved
+run is the CLI's run folder byte for byte, overrides reach the config, a sweep's rows are the
+single runs' summaries, and bad arguments are one-line ValueErrors before any work."""
+
+import doctest
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import dronefleet
+from dronefleet import api, cli, scenarios
+from dronefleet.config import ConfigError
+from dronefleet.outputs import OutputError
+
+ROOT = Path(__file__).resolve().parents[1]
+REPLENISHMENT = ROOT / "configs" / "replenishment.toml"
+#: A delivery run of a few seconds of work, and a replenishment one.
+TINY = {"delivery": {"horizon_weeks": 0.05, "n_uavs": 5}, "replenishment": {"trials": 2, "ticks": 300}}
+
+
+def readme_examples():
+    """The ```python blocks of the README's section "Python API" (other sections hold fragments)."""
+    section = (ROOT / "README.md").read_text(encoding="utf-8").split("\n## Python API\n")[1].split("\n## ")[0]
+    return re.findall(r"^```python\n(.*?)^```", section, re.MULTILINE | re.DOTALL)
+
+
+def test_the_readme_has_python_examples_of_run_and_sweep():
+    code = "\n".join(readme_examples())
+    assert "dronefleet.run(" in code and "dronefleet.sweep(" in code and '"replenishment"' in code
+
+
+@pytest.mark.parametrize("number", range(len(readme_examples())))
+def test_the_readme_python_examples_run(number, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)  # what an example saves lands here
+    exec(compile(readme_examples()[number], f"README.md python example {number + 1}", "exec"), {})
+    assert capsys.readouterr().out  # each example prints what it shows
+
+
+def test_the_docstring_examples_run():
+    assert doctest.testmod(api).failed == 0
+
+
+def files(folder):
+    return {path.name: path.read_bytes() for path in sorted(Path(folder).iterdir())}
+
+
+@pytest.mark.parametrize("cli_args, config, changes", [
+    (["--seed", "4", "--set", "horizon_weeks=0.05", "--set", "n_uavs=5", "--set", "auction.rule=random"],
+     None, {"seed": 4, "set": {"auction.rule": "random"}, **TINY["delivery"]}),
+    ([str(REPLENISHMENT), "--set", "trials=2", "--set", "ticks=300", "--set", "first_trial=3"],
+     REPLENISHMENT, {"seed": 3, **TINY["replenishment"]}),
+], ids=["delivery", "replenishment"])
+def test_a_saved_run_is_the_clis_run_folder_byte_for_byte(tmp_path, capsys, cli_args, config, changes):
+    assert cli.main(["run", *cli_args, "--out", str(tmp_path / "cli")]) == 0
+    saved = dronefleet.run(config, **changes).save(tmp_path / "api")
+    assert saved == tmp_path / "api"
+    assert files(tmp_path / "api") == files(tmp_path / "cli")
+    assert len(files(tmp_path / "cli")) == len(scenarios.scenario_of(config).tables)
+
+
+def test_save_refuses_a_run_folder_unless_overwrite(tmp_path):
+    r = dronefleet.run(**TINY["delivery"])
+    r.save(tmp_path / "run")
+    with pytest.raises(OutputError, match="holds a complete run"):
+        r.save(tmp_path / "run")
+    r.save(tmp_path / "run", overwrite=True)
+    assert set(files(tmp_path / "run")) == {f"{name}.parquet" for name in r.arrow}
+
+
+def test_overrides_the_seed_and_set_reach_the_config():
+    r = dronefleet.run(seed=3, tau_minutes=20, set={"auction.rule": "random", "fleet.n_uavs": 5}, horizon_weeks=0.05)
+    delivery = scenarios.SCENARIOS["delivery"]
+    assert r.config == delivery.load(None, ["tau_minutes=20", "auction.rule=random", "n_uavs=5",
+                                            "horizon_weeks=0.05"], seed=3)
+    assert r.summary.loc[0, ["seed", "rule", "tau_minutes", "n_uavs"]].tolist() == [3, "random", 20.0, 5]
+    assert r.summary.equals(r.tables["summary"]) and r.summary is r.summary  # converted once
+
+
+def test_a_replenishment_run_has_its_own_tables_and_seed_key():
+    r = dronefleet.run("replenishment", seed=5, strategy="fixed", n_chargers=0, **TINY["replenishment"])
+    assert r.scenario.name == "replenishment" and (r.config.first_trial, r.config.params.mobile) == (5, False)
+    assert set(r.tables) == {"summary", "timeseries"}
+    assert r.summary.trial.tolist() == [5, 6]
+    with pytest.raises(AttributeError, match="no attribute .orders.; its tables: summary, timeseries"):
+        _ = r.orders
+
+
+def test_sweep_rows_are_the_single_runs_summaries():
+    table = dronefleet.sweep({"rule": ["least_confident", "random"], "tau_minutes": [15, 30]}, seeds=[0, 1],
+                             set=TINY["delivery"], jobs=1)
+    assert isinstance(table, pd.DataFrame) and len(table) == 8
+    assert table[["rule", "tau_minutes", "seed"]].values.tolist()[:3] == [
+        ["least_confident", 15.0, 0], ["least_confident", 15.0, 1], ["least_confident", 30.0, 0]]
+    for i, row in table.iterrows():
+        single = dronefleet.run(seed=row.seed, rule=row.rule, tau_minutes=row.tau_minutes, **TINY["delivery"]).summary
+        pd.testing.assert_frame_equal(table.loc[[i], single.columns].reset_index(drop=True), single)
+
+def test_a_replenishment_sweep_has_a_row_per_trial_of_each_run():
+    table = dronefleet.sweep([{"strategy": ["fixed"], "n_chargers": [0]}, {"strategy": ["mobile"], "n_chargers": [2]}],
+                             base=REPLENISHMENT, set=TINY["replenishment"], jobs=1)
+    assert table[["strategy", "n_chargers", "first_trial", "trial"]].values.tolist() == [
+        ["fixed", 0, 1, 1], ["fixed", 0, 1, 2], ["mobile", 2, 1, 1], ["mobile", 2, 1, 2]]
+    single = dronefleet.run(REPLENISHMENT, strategy="mobile", n_chargers=2, **TINY["replenishment"]).summary
+    pd.testing.assert_frame_equal(table[single.columns].iloc[2:].reset_index(drop=True), single)
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: dronefleet.run(tau_minute=20), r"unknown key 'tau_minute' \(did you mean 'tau_minutes'\?\)"),
+    (lambda: dronefleet.run(3), r"config=3: expected None, a scenario name \('delivery', 'replenishment'\)"),
+    (lambda: dronefleet.run("no-such-config.toml"), r"cannot read config file 'no-such-config.toml'"),
+    (lambda: dronefleet.run(tau_minutes=-1), r"orders.tau_minutes = -1 is out of range: allowed > 0"),
+    (lambda: dronefleet.run(rule=5), r"auction.rule must be a string, got int 5"),
+    (lambda: dronefleet.run(seed=-1), r"run.seed = -1 is out of range"),
+    (lambda: dronefleet.run(set=["tau_minutes=20"]), r"set=\['tau_minutes=20'\]: expected a dict"),
+    (lambda: dronefleet.run(set={"orders.tau_minutes": 20}, tau_minutes=25), r"tau_minutes is given twice"),
+    (lambda: dronefleet.run(seed=1, set={"run.seed": 2}), r"seed is given twice"),
+    (lambda: dronefleet.run(set={1: 2}), r"config key 1 is not a string"),
+    (lambda: dronefleet.run("replenishment", seed=0), r"run.first_trial = 0 is out of range"),
+    (lambda: dronefleet.sweep({}, seeds=[0]), r"\[grid\] is empty"),
+    (lambda: dronefleet.sweep("rule", seeds=[0]), r"grid='rule': expected a dict of config keys to lists"),
+    (lambda: dronefleet.sweep({"rule": "random"}, seeds=[0]), r"rule must be a list of values"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}), r"seeds: give a non-empty list"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=5), r"seeds=5: expected a list of integers"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0, 0]), r"seed 0 is listed more than once"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], jobs=0), r"jobs=0: expected an integer >= 1"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], set={"rule": "random"}), r"rule is both fixed"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], base="replenishment"), r"unknown key 'rule'"),
+    (lambda: dronefleet.sweep({"n_uavs": [0]}, seeds=[0]), r"\[grid\] at n_uavs = 0: .*n_uavs"),
+], ids=lambda value: None if callable(value) else "")
+def test_bad_arguments_are_one_line_value_errors_before_any_work(call, message):
+    with pytest.raises(ConfigError, match=message) as refused:
+        call()
+    assert isinstance(refused.value, ValueError) and "\n" not in str(refused.value)
+
+
+def test_dronefleet_sweep_is_both_the_function_and_the_machinerys_module():
+    from dronefleet import sweep as machinery
+
+    assert machinery is sys.modules["dronefleet.sweep"] and callable(machinery)
+    assert machinery.load_sweep is dronefleet.sweep.load_sweep
+
+
+_PROBE = """
+import json, sys
+import dronefleet
+loaded = lambda: [m for m in ("numpy", "pandas", "pyarrow") if m in sys.modules]
+imported = loaded()
+r = dronefleet.run(horizon_weeks=0.05, n_uavs=5)
+ran = loaded()
+r.summary
+print(json.dumps([imported, ran, loaded()]))
+"""
+
+
+def test_import_loads_no_numerical_library_and_a_run_no_pandas_until_a_table_is_read():
+    proc = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=600, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout.splitlines()[-1]) == [[], ["numpy", "pyarrow"], ["numpy", "pandas", "pyarrow"]]

@@ -63,11 +63,12 @@ function makeScene(d) {
 
   return {
     draw, counters,
-    formatTime: t => `${t.toFixed(1)} s of ${d.duration_s.toFixed(0)} s`,
+    formatTime: t => `${t.toFixed(1)} s of ${d.duration_s.toFixed(1)} s`,
     speeds: [["1x", 1], ["2x", 2], ["5x", 5], ["10x", 10], ["30x", 30], ["100x", 100]],
     speed: 3,
     chart: { label: "Energy stored in all batteries", t: d.work.map((_, i) => i * d.frame_s), v: d.stored },
     colour: { label: "Battery [fraction of capacity]", min: "0", max: "1" },
-    legend: [["\u25cf", "#222", "worker"], ["\u25a0", "#222", "mobile charger"], ["\u2715", "#222", "battery empty"]],
+    legend: [["\u25cf", "#222", "worker"], ...(d.n_chargers > 0 ? [["\u25a0", "#222", "mobile charger"]] : []),
+             ["\u2715", "#222", "battery empty"]],
   };
 }

@@ -1,6 +1,7 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
 [--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
-``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig09..fig12|fig16..fig20|all [--quick]``.
+``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig09..fig12|fig16..fig20|all [--quick]``;
+``dronefleet replay RUN_DIR [--out FILE.html]``.
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery."""
 
 import argparse
@@ -149,6 +150,27 @@ def run(args):
     print(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
     if fleet_out is not None:
         print(f"  {'saved fleet':<22}{saved}")
+    _write_replay(args, out)
+    return 0
+
+
+def _write_replay(args, out):
+    """``run --replay``: the replay page beside the run's tables."""
+    if args.replay:
+        from . import replay
+        from .records import REPLAY_FILE
+
+        print(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE)}")
+
+
+def replay_command(args):
+    """``dronefleet replay RUN_DIR [--out FILE.html]``: the run's replay page (:mod:`dronefleet.replay`)."""
+    from . import replay
+    from .records import REPLAY_FILE
+
+    out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
+    written = replay.write(args.run_dir, out)
+    print(f"dronefleet replay: {written} ({written.stat().st_size / 1e6:.1f} MB)")
     return 0
 
 
@@ -175,6 +197,7 @@ def run_scenario(scenario, args):
     print(scenario.format_summary(tables))
     print(f"  {'wall time':<22}{wall:.2f} s")
     print(f"  {'tables':<22}{out}/{{{','.join(tables)}}}.parquet")
+    _write_replay(args, out)
     return 0
 
 
@@ -233,7 +256,15 @@ def build_parser(reproduce_arguments=True):
                         "same as --set run.fleet_file=FILE")
     p.add_argument("--save-fleet", metavar="FILE",
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
+    p.add_argument("--replay", action="store_true",
+                   help="also write replay.html beside the tables: a page that plays the run in a browser")
     p.set_defaults(func=run)
+    p = commands.add_parser("replay", help="write a run's replay page: one self-contained HTML file",
+                            description="A page that plays a run folder in any browser, offline: delivery "
+                                        "flights, or the first trial's robots of a replenishment run.")
+    p.add_argument("run_dir", metavar="RUN_DIR", help="a run folder that dronefleet run wrote")
+    p.add_argument("--out", metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
+    p.set_defaults(func=replay_command)
     p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
                             description="Work and efficiency bounds of REPLENISHMENT.md section 9, both "
                                         "strategies; refused (exit 2) where a bound does not exist.")

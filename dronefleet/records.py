@@ -23,6 +23,9 @@ import pyarrow.parquet as pq
 from .provenance import stamp
 
 CONFIG_KEY = b"dronefleet.config"
+#: The replay page (:mod:`dronefleet.replay`) that ``dronefleet run --replay`` writes beside
+#: the tables: the one file other than tables that a run folder may hold.
+REPLAY_FILE = "replay.html"
 
 
 def arrow_array(values, null=None) -> pa.Array:
@@ -96,14 +99,15 @@ def run_dir_state(out_dir, table_names):
     """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table ``table_names`` of a run),
     ``"partial"`` (some tables and nothing else: left by a dronefleet before complete-or-absent
     run folders), ``"file"`` (not a folder) or ``"other"`` (files that are not a run's tables).
-    Hidden entries (``.DS_Store``, ...) go with the run, but a folder holding only those is not empty."""
+    Hidden entries (``.DS_Store``, ...) and the run's :data:`REPLAY_FILE` go with the run, but a
+    folder holding only those is not empty."""
     out_dir = Path(out_dir)
     if not out_dir.exists():
         return "absent"
     if not out_dir.is_dir():
         return "file"
     entries = [p.name for p in out_dir.iterdir()]
-    names = {name for name in entries if not name.startswith(".")}
+    names = {name for name in entries if not name.startswith(".") and name != REPLAY_FILE}
     tables = {f"{name}.parquet" for name in table_names}
     if not entries:
         return "empty"

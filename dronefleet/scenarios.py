@@ -48,6 +48,11 @@ The contract: a scenario is a module defining
 ``replicates(config) -> range`` (optional)
     the replicates (trials) a run holds, if a run holds several: a sweep refuses seeds whose
     runs would hold a replicate twice. Without it, a run is the one replicate its seed names.
+``replay_data(run_dir) -> dict`` (optional)
+    what the replay page (:mod:`dronefleet.replay`) shows of the complete run folder
+    ``run_dir`` (a :class:`pathlib.Path`), JSON-ready (``title`` and ``duration_s`` [s] at
+    least); the script ``replay.js`` beside the module draws it (it defines
+    ``makeScene(data)``, see ``dronefleet/replay.html``).
 ``outdated(config, summary) -> bool`` (optional)
     True if a done run (its ``summary`` file at the path ``summary``) must run again because
     an input it read besides its config changed since (delivery: a saved fleet written again).
@@ -66,6 +71,7 @@ imports its module only when first used, so ``dronefleet --help`` stays cheap.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from importlib import resources
 from types import ModuleType
 from typing import Callable
 
@@ -158,6 +164,19 @@ class Scenario:
     @property
     def format_bounds(self) -> Callable | None:
         return getattr(self.module, "format_bounds", None)
+
+    def replay_data(self, run_dir) -> dict:
+        """The replay page's data of the run folder ``run_dir``; ConfigError if the scenario has no replay."""
+        replay_data = getattr(self.module, "replay_data", None)
+        if replay_data is None:
+            having = [s.name for s in SCENARIOS.values() if hasattr(s.module, "replay_data")]
+            raise ConfigError(f"scenario {self.name!r} has no replay page; scenarios with one: {', '.join(having)}")
+        return replay_data(run_dir)
+
+    @property
+    def replay_script(self) -> str:
+        """The JavaScript that draws the scenario's replay page (``replay.js`` beside its module)."""
+        return resources.files(self.module.__package__).joinpath("replay.js").read_text(encoding="utf-8")
 
 
 def _delivery() -> ModuleType:

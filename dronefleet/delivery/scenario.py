@@ -16,7 +16,8 @@ from .config import PARAMETERS, AnyText, Interval, Options, default_config, load
 from .config import replace as replace_fields
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
-           "replace", "value", "read_config", "simulate", "outdated", "format_summary", "describe", "label"]
+           "replace", "value", "read_config", "simulate", "outdated", "format_summary", "describe", "label",
+           "replay_data"]
 
 NAME = "delivery"
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
@@ -103,3 +104,10 @@ def describe(config):
 
 def label(config):
     return f"seed{config.seed}"
+
+
+def replay_data(run_dir):
+    """The replay page's data of a run folder: :func:`dronefleet.delivery.replay.replay_data`."""
+    from .replay import replay_data as data
+
+    return data(run_dir)

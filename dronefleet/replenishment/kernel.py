@@ -374,7 +374,7 @@ def place_robots(rng, tr, x, y, th):
 @njit(cache=True)
 def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_noise,
                tables, n_sup, init_states, unc_order, n_unc, ctrl_order, n_ctrl,
-               mc_rank, rng, trace):
+               mc_rank, rng, trace, track):
     """Advance all trials of one configuration through ``ticks`` ticks.
 
     Parameters
@@ -382,8 +382,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     rates : float64 (7,)
         v_min, v_move, v_work, v_charge, lambda, c_w, c_m (indices R_*).
     n_workers, n_chargers, ticks, sample_every : int
-    mobile, wheel_noise, trace : bool
-        Mobile-charger strategy; multiply wheels by N(1, 0.1^2); record a per-tick trace.
+    mobile, wheel_noise, trace, track : bool
+        Mobile-charger strategy; multiply wheels by N(1, 0.1^2); record a per-tick trace;
+        record the first trial's track (pose, energy, phase of every robot at each sample).
     tables : int64 (2, K, S, N_EVENTS)
         ``tables[role, k, s, e]``: next state of supervisor k of the role's file, or -1.
     n_sup : int64 (2,)
@@ -404,8 +405,9 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
         shared (trials,), lost (trials,), depleted (trials, n) bool,
         energy (trials, n), drawn (trials, n), paid (trials, n),
         given (trials, n), received (trials, n), series (trials, samples, N_TS),
-        trace arrays)``; trace arrays have a tick axis of length ``ticks`` if
-        ``trace`` else 0.
+        trace arrays, track arrays)``; trace arrays have a tick axis of length ``ticks`` if
+        ``trace`` else 0; track arrays ``(x, y, energy, phase)`` are (samples, n) if
+        ``track`` else (0, n): the first trial at the ticks of ``series``.
     """
     n_trials = rng.shape[0]
     nw = n_workers
@@ -479,6 +481,12 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     tr_msg_to = np.full((n_trials, tt, n), -1, dtype=np.int64)
     tr_received = np.zeros((n_trials, tt, n))
     tr_source = np.full((n_trials, tt, n), -1, dtype=np.int64)
+    # the first trial's track, sampled with the series: a run of weeks of ticks stays small
+    tk = n_samples if track else 0
+    tk_x = np.zeros((tk, n))
+    tk_y = np.zeros((tk, n))
+    tk_energy = np.zeros((tk, n))
+    tk_phase = np.zeros((tk, n), dtype=np.int64)
 
     # --- scratch (per trial, reused every tick)
     dist = np.zeros((n, n))
@@ -520,6 +528,10 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                 sup[tr, i, k] = init_states[role, k]
             series[tr, 0, TS_STORED] += energy[tr, i]
             series[tr, 0, (TS_WORKER_PHASE if i < nw else TS_CHARGER_PHASE)] += 1.0
+            if track and tr == 0:
+                tk_x[0, i] = x[tr, i]
+                tk_y[0, i] = y[tr, i]
+                tk_energy[0, i] = energy[tr, i]
 
     # Trials never interact, so each runs all its ticks in turn: its state stays in
     # cache (measured 13 % faster than sweeping all trials every tick).
@@ -973,9 +985,14 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     base_col = TS_WORKER_PHASE if i < nw else TS_CHARGER_PHASE
                     series[tr, row, base_col + phase[tr, i]] += 1.0
                     series[tr, row, TS_STORED] += energy[tr, i]
+                    if track and tr == 0:
+                        tk_x[row, i] = x[tr, i]
+                        tk_y[row, i] = y[tr, i]
+                        tk_energy[row, i] = energy[tr, i]
+                        tk_phase[row, i] = phase[tr, i]
                 series[tr, row, TS_WORK] = points[tr]
 
     trace_arrays = (tr_x, tr_y, tr_energy, tr_consumed, tr_flags, tr_event, tr_sup, tr_from,
                     tr_to, tr_msg_req, tr_msg_from, tr_msg_to, tr_received, tr_source)
     return (points, consumed, work_energy, shared, lost, depleted, energy, drawn, paid, given,
-            received, series, trace_arrays)
+            received, series, trace_arrays, (tk_x, tk_y, tk_energy, tk_phase))

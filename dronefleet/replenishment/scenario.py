@@ -51,7 +51,7 @@ from .simulate import TRIAL_SEED_FACTOR, summary_columns
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "Config", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "simulate",
-           "format_summary", "describe", "label", "format_bounds"]
+           "format_summary", "describe", "label", "format_bounds", "replay_data"]
 
 NAME = "replenishment"
 TABLES = ("summary", "timeseries")
@@ -371,3 +371,10 @@ def format_bounds(config: Config) -> str:
     ]
     return "\n".join(f"  {row}" if isinstance(row, str) else
                      f"    {row[0]:<12}{row[1]:>10} {row[2]:<7} {row[3]}" for row in rows)
+
+
+def replay_data(run_dir):
+    """The replay page's data of a run folder: :func:`dronefleet.replenishment.replay.replay_data`."""
+    from .replay import replay_data as data
+
+    return data(run_dir)

@@ -104,7 +104,7 @@ def _mc_rank(n_chargers):
 
 
 def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
-             wheel_noise=True, trace=False):
+             wheel_noise=True, trace=False, track=False):
     """Simulate every trial of ``params`` in one compiled call.
 
     Parameters
@@ -123,6 +123,9 @@ def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
         False switches the N(1, 0.1^2) wheel factors off (tests only).
     trace : bool
         Also return per-tick, per-robot arrays (memory ~ trials x ticks x robots).
+    track : bool
+        Also return the first trial's robots at every sample of the time series (memory ~
+        samples x robots; for the replay page). Changes no other output.
 
     Returns
     -------
@@ -140,6 +143,9 @@ def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
         With ``trace``: ``trace`` is a dict of (trials, ticks, n) arrays
         (``sup_states`` is (trials, ticks, n, K): states after the
         uncontrollable events, before the controllable one).
+        With ``track``: ``track`` is a dict of (samples, n) arrays of the first trial at the
+        ticks ``series_tick``: ``x``, ``y`` (centre [m]), ``energy`` (battery [energy units])
+        and ``phase`` (controller phase 0..3, as in ``series``).
     """
     params.validate()
     trials = params.trials if trials is None else int(trials)
@@ -166,10 +172,10 @@ def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
     rates = np.array([V_MIN, V_MOVE, params.v_work, params.v_charge, params.transfer_loss,
                       params.worker_capacity, params.charger_capacity], dtype=np.float64)
     (points, consumed, work_energy, shared, lost, depleted, battery, drawn, paid, given,
-     received, series, trace_arrays) = kernel.run_trials(
+     received, series, trace_arrays, track_arrays) = kernel.run_trials(
         rates, params.n_workers, params.n_chargers, params.ticks, params.sample_every,
         params.mobile, wheel_noise, tables, n_sup, init, unc, n_unc, ctrl, n_ctrl,
-        _mc_rank(params.n_chargers), _rng_states(seeds), trace)
+        _mc_rank(params.n_chargers), _rng_states(seeds), trace, track)
 
     nw = params.n_workers
     total = consumed.sum(axis=1)
@@ -199,6 +205,8 @@ def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
     }
     if trace:
         out["trace"] = dict(zip(TRACE_NAMES, trace_arrays))
+    if track:
+        out["track"] = dict(zip(("x", "y", "energy", "phase"), track_arrays))
     return out
 
 

@@ -1,0 +1,90 @@
+"""What the replay page (:mod:`dronefleet.replay`) shows of a delivery run, from its tables alone.
+
+Every attempt is one flight out along a straight line from the fulfilment centre and back
+along it, at the cruise speed: out from ``takeoff_s`` to ``turn_s`` (the delivery or the
+abort), back until ``return_s`` (the landing, or the loss of the UAV on the way). The model
+knows an order's distance, not its direction, so the page spreads the orders around the
+centre by the golden angle of their id: the same picture for the same run, nothing more
+(the direction is for the eye only). SoC is interpolated linearly between the takeoff and
+landing values, and on the ground between a landing and the next takeoff (charging).
+"""
+
+import math
+
+import numpy as np
+import pyarrow.parquet as pq
+
+from .config import SECONDS_PER_WEEK
+
+__all__ = ["replay_data", "GOLDEN_ANGLE"]
+
+#: Bearing step between consecutive order ids [rad]: successive orders never line up.
+GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
+OUTCOMES = ("delivered", "aborted", "lost", "in_flight")
+
+
+def _rounded(values, decimals):
+    """A float column as a JSON-ready list, to ``decimals`` places (the page draws pixels)."""
+    return np.round(np.asarray(values, dtype=np.float64), decimals).tolist()
+
+
+def replay_data(run_dir):
+    """The page's data of the delivery run in ``run_dir`` (a folder ``dronefleet run`` wrote).
+
+    Returns a JSON-ready dict: ``title``, ``duration_s`` (the horizon [s]), ``week_s``,
+    ``n_uavs``, ``radius_m`` (the farthest order [m]); ``flights``, columns of one row per
+    attempt sorted by UAV then takeoff, with ``uav_start`` (n_uavs + 1 offsets: UAV u's
+    flights are rows ``uav_start[u]`` to ``uav_start[u + 1] - 1``): ``takeoff_s``,
+    ``turn_s``, ``return_s`` [s] (a flight still out at the horizon: when it would turn and
+    land), ``turn_m`` (distance from the centre at the turn [m]), ``end_m`` (at
+    ``return_s``: 0 unless lost [m]), ``bearing`` [rad], ``soc0``, ``soc1`` (at takeoff
+    and at ``return_s`` [%]), ``outcome`` (index into ``outcomes``); ``arrival_s`` (every
+    order's arrival, ascending [s]); ``queue``: the unallocated orders of the time series
+    (``t_s``, ``orders``).
+    """
+    from .records import read_config
+    from .scenario import describe
+
+    config = read_config(run_dir / "summary.parquet")
+    horizon, speed = config.horizon_s, config.speed_m_s
+    orders = pq.read_table(run_dir / "orders.parquet", columns=["order_id", "arrival_s", "distance_m"]).to_pandas()
+    attempts = pq.read_table(run_dir / "attempts.parquet", columns=[
+        "uav", "order_id", "takeoff_s", "takeoff_soc", "outcome", "turn_s", "return_s", "return_soc"]).to_pandas()
+    series = pq.read_table(run_dir / "timeseries.parquet", columns=["t_s", "unallocated"]).to_pandas()
+
+    a = attempts.sort_values(["uav", "takeoff_s"], kind="stable").reset_index(drop=True)
+    distance = orders["distance_m"].to_numpy()[a["order_id"].to_numpy()]
+    takeoff = a["takeoff_s"].to_numpy()
+    # a flight still out at the horizon: when it would turn and land, had the run gone on
+    turn = a["turn_s"].to_numpy()
+    turn = np.where(np.isnan(turn), takeoff + distance / speed, turn)
+    back = a["return_s"].to_numpy()
+    back = np.where(np.isnan(back), 2.0 * turn - takeoff, back)
+    turn_m = np.minimum(distance, speed * (turn - takeoff))
+    lost = a["outcome"].to_numpy() == "lost"
+    end_m = np.where(lost, np.maximum(turn_m - speed * (back - turn), 0.0), 0.0)
+    soc1 = a["return_soc"].fillna(a["takeoff_soc"]).to_numpy()  # still out: no landing SoC yet
+    starts = np.searchsorted(a["uav"].to_numpy(), np.arange(config.n_uavs + 1))
+    return {
+        "scenario": "delivery",
+        "title": f"delivery run: {describe(config)}",
+        "duration_s": horizon,
+        "week_s": SECONDS_PER_WEEK,
+        "n_uavs": config.n_uavs,
+        "radius_m": float(orders["distance_m"].max()) if len(orders) else 1000.0,
+        "outcomes": list(OUTCOMES),
+        "uav_start": starts.tolist(),
+        "flights": {
+            "takeoff_s": _rounded(takeoff, 1),
+            "turn_s": _rounded(turn, 1),
+            "return_s": _rounded(back, 1),
+            "turn_m": _rounded(turn_m, 0),
+            "end_m": _rounded(end_m, 0),
+            "bearing": _rounded(a["order_id"].to_numpy() * GOLDEN_ANGLE % (2.0 * math.pi), 3),
+            "soc0": _rounded(a["takeoff_soc"], 1),
+            "soc1": _rounded(soc1, 1),
+            "outcome": [OUTCOMES.index(o) for o in a["outcome"]],
+        },
+        "arrival_s": _rounded(np.sort(orders["arrival_s"].to_numpy()), 1),
+        "queue": {"t_s": _rounded(series["t_s"], 1), "orders": series["unallocated"].tolist()},
+    }

@@ -1,0 +1,80 @@
+"""The replay page of a run: one self-contained HTML file that plays it in a browser.
+
+``dronefleet replay RUN_DIR --out FILE.html`` and ``dronefleet run --replay`` (which writes
+``replay.html`` beside the tables) come here. The page is the template ``replay.html`` with
+the run's data embedded as JSON and its scenario's drawing script (``replay.js`` in the
+scenario's subpackage) inline: no file or address outside the page is ever fetched. A
+scenario provides the page through the contract of :mod:`dronefleet.scenarios`
+(``replay_data(run_dir) -> dict``); the page's player gives it play/pause, speed, a time
+slider, the counters, an overview chart and ``#t=SECONDS`` (open paused at that time).
+"""
+
+import json
+import math
+from importlib import resources
+from pathlib import Path
+
+from . import scenarios
+from .config import SCENARIO_KEY, ConfigError
+from .outputs import writing
+from .records import CONFIG_KEY, REPLAY_FILE, run_dir_state, write_atomic
+
+__all__ = ["scenario_of_run", "page", "write"]
+
+TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
+
+
+def scenario_of_run(run_dir) -> scenarios.Scenario:
+    """The scenario whose complete run folder ``run_dir`` is; ConfigError (one line) otherwise."""
+    import pyarrow.parquet as pq
+
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r} is {'a file' if run_dir.exists() else 'missing'}; "
+                          "give a folder that dronefleet run wrote")
+    try:
+        config = json.loads(pq.read_schema(run_dir / "summary.parquet").metadata[CONFIG_KEY])
+    except (OSError, KeyError, TypeError, ValueError):  # absent, not parquet, no config in it
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a run folder: it has no summary.parquet "
+                          "written by dronefleet run") from None
+    scenario = scenarios.get(config.get(SCENARIO_KEY, "delivery"), f"RUN_DIR {str(run_dir)!r}: ")
+    if run_dir_state(run_dir, scenario.tables) != "complete":
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a complete {scenario.name} run folder: it must "
+                          f"hold exactly {', '.join(f'{name}.parquet' for name in scenario.tables)}")
+    return scenario
+
+
+def _json_ready(value):
+    """``value`` with NaN and infinities as null: JSON has no such numbers."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {key: _json_ready(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_json_ready(item) for item in value]
+    return value
+
+
+def page(data, scene_script) -> str:
+    """The HTML page of ``data`` (a scenario's ``replay_data``) drawn by ``scene_script``."""
+    template = resources.files(__package__).joinpath(TEMPLATE).read_text(encoding="utf-8")
+    # "</" inside the script elements would end them early; JSON may write it as "<\/"
+    embedded = json.dumps(_json_ready(data), allow_nan=False, separators=(",", ":")).replace("</", "<\\/")
+    return template.replace("/*DATA*/", embedded, 1).replace("/*SCENE*/", scene_script, 1)
+
+
+def write(run_dir, out) -> Path:
+    """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
+
+    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or ``out``
+    cannot be written (a folder, a missing or read-only parent, ...).
+    """
+    run_dir, out = Path(run_dir), Path(out)
+    scenario = scenario_of_run(run_dir)
+    if out.is_dir():
+        raise ConfigError(f"--out {str(out)!r} is a folder; give the page's file name, e.g. {out / REPLAY_FILE}")
+    if not out.parent.is_dir():
+        raise ConfigError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
+    html = page(scenario.replay_data(run_dir), scenario.replay_script)
+    with writing(out):
+        return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))

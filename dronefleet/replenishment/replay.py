@@ -1,0 +1,63 @@
+"""What the replay page (:mod:`dronefleet.replay`) shows of a replenishment run: its first trial.
+
+A run's tables hold per-trial totals and phase counts, not where the robots were, so the
+first trial is simulated again, alone, with the kernel's track switched on (a trial's
+outcome does not depend on the trials beside it, so this is exactly the trial of the run):
+every robot's centre, battery and controller phase at each sample of the time series.
+"""
+
+import math
+
+import numpy as np
+
+from .kernel import DT, RADIUS, TS_STORED, TS_WORK, WALL
+
+__all__ = ["replay_data", "AREAS", "MAX_FRAMES"]
+
+#: The floor's coloured areas, as :func:`dronefleet.replenishment.kernel.floor_colour` reads
+#: them: ``[x_min, x_max, y_min, y_max]`` [m]; the transfer area only with mobile chargers.
+AREAS = {"base": [-0.825, -0.5, -0.825, 0.825], "transfer": [0.2, 0.5, -0.825, 0.825],
+         "work": [0.5, 0.825, -0.825, 0.825]}
+#: At most this many frames in the page: a longer run keeps every k-th sample.
+MAX_FRAMES = 20_000
+
+
+def replay_data(run_dir):
+    """The page's data of the replenishment run in ``run_dir``: its first trial.
+
+    Returns a JSON-ready dict: ``title``, ``duration_s`` (ticks x 0.1 s), ``frame_s`` (time
+    between frames [s]), ``n_workers``, ``n_chargers``, ``capacity`` (per robot [energy
+    units]), ``wall_m``, ``radius_m``, ``areas`` (:data:`AREAS`), ``phases`` (names per role);
+    per frame (robot-major within a frame): ``x``, ``y`` [m], ``energy`` [energy units],
+    ``phase``; and per frame ``work`` (cumulative points) and ``stored`` (energy in all
+    batteries).
+    """
+    from .scenario import _PHASES, describe, read_config
+    from .simulate import simulate
+
+    config = read_config(run_dir / "summary.parquet")
+    p = config.params
+    r = simulate(p, trials=1, first_trial=config.first_trial, track=True)
+    track = r["track"]
+    stride = math.ceil(track["x"].shape[0] / MAX_FRAMES)
+    frames = slice(None, None, stride)
+    areas = AREAS if p.mobile else {name: area for name, area in AREAS.items() if name != "transfer"}
+    return {
+        "scenario": "replenishment",
+        "title": f"replenishment run, trial {config.first_trial} of: {describe(config)}",
+        "duration_s": p.ticks * DT,
+        "frame_s": p.sample_every * stride * DT,
+        "n_workers": p.n_workers,
+        "n_chargers": p.n_chargers,
+        "capacity": [p.worker_capacity] * p.n_workers + [p.charger_capacity] * p.n_chargers,
+        "wall_m": WALL,
+        "radius_m": RADIUS,
+        "areas": areas,
+        "phases": {"workers": list(_PHASES["workers"]), "chargers": list(_PHASES["chargers"])},
+        "x": np.round(track["x"][frames], 4).reshape(-1).tolist(),
+        "y": np.round(track["y"][frames], 4).reshape(-1).tolist(),
+        "energy": np.round(track["energy"][frames], 2).reshape(-1).tolist(),
+        "phase": track["phase"][frames].reshape(-1).tolist(),
+        "work": r["series"][0, frames, TS_WORK].astype(np.int64).tolist(),
+        "stored": np.round(r["series"][0, frames, TS_STORED], 1).tolist(),
+    }

@@ -1,0 +1,224 @@
+"""The replay page: its data follows the run's tables, it is self-contained, the command refuses
+bad input in one line, and it plays in a real browser (headless Chromium) without an error."""
+
+import json
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from dronefleet import cli, replay
+from dronefleet.delivery.replay import replay_data as delivery_data
+from dronefleet.records import REPLAY_FILE, run_dir_state
+from dronefleet.replenishment import Params, simulate
+from dronefleet.replenishment.kernel import BASE, TRANSFER, WORK, floor_colour
+from dronefleet.replenishment.replay import AREAS
+from dronefleet.replenishment.replay import replay_data as replenishment_data
+
+REPLENISHMENT = 'scenario = "replenishment"\n[run]\ntrials = 2\nfirst_trial = 3\nticks = 900\n'
+
+
+@pytest.fixture(scope="module")
+def delivery_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("delivery") / "run"
+    assert cli.main(["run", "--set", "horizon_weeks=0.1", "--set", "n_uavs=5", "--seed", "2",
+                     "--out", str(out), "--replay"]) == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def replenishment_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("replenishment")
+    (folder / "replenishment.toml").write_text(REPLENISHMENT)
+    out = folder / "run"
+    assert cli.main(["run", str(folder / "replenishment.toml"), "--out", str(out), "--replay"]) == 0
+    return out
+
+
+def embedded(path):
+    """The JSON data embedded in a replay page."""
+    return json.loads(re.search(r'id="run-data">(.*?)</script>', path.read_text(), re.S)[1])
+
+
+def test_run_replay_writes_the_page_beside_the_tables_and_the_folder_stays_a_run(delivery_run, capsys):
+    assert (delivery_run / REPLAY_FILE).is_file()
+    assert run_dir_state(delivery_run, ("orders", "attempts", "fleet", "timeseries", "summary")) == "complete"
+    # --overwrite takes the folder as a run; the new run comes without the old (now stale) page
+    assert cli.main(["run", "--set", "horizon_weeks=0.01", "--set", "n_uavs=2", "--out", str(delivery_run),
+                     "--overwrite"]) == 0
+    assert not (delivery_run / REPLAY_FILE).exists()
+    assert cli.main(["run", "--set", "horizon_weeks=0.1", "--set", "n_uavs=5", "--seed", "2",
+                     "--out", str(delivery_run), "--overwrite", "--replay"]) == 0
+    capsys.readouterr()
+
+
+def test_a_folder_holding_only_a_replay_page_is_not_a_run(tmp_path):
+    (tmp_path / REPLAY_FILE).write_text("<html></html>")
+    assert run_dir_state(tmp_path, ("summary",)) == "other"
+
+
+def test_delivery_flights_follow_the_attempts(delivery_run):
+    data = delivery_data(delivery_run)
+    attempts = pq.read_table(delivery_run / "attempts.parquet").to_pandas()
+    orders = pq.read_table(delivery_run / "orders.parquet").to_pandas()
+    f = data["flights"]
+    assert len(f["takeoff_s"]) == len(attempts) and data["n_uavs"] == 5
+    for uav in range(5):
+        rows = slice(data["uav_start"][uav], data["uav_start"][uav + 1])
+        own = attempts[attempts.uav == uav].sort_values("takeoff_s")
+        assert f["takeoff_s"][rows] == np.round(own.takeoff_s, 1).tolist()
+        assert f["turn_s"][rows] == np.round(own.turn_s, 1).tolist()
+        assert f["return_s"][rows] == np.round(own.return_s, 1).tolist()
+        outcome = [data["outcomes"][o] for o in f["outcome"][rows]]
+        assert outcome == own.outcome.tolist()
+        distance = orders.distance_m.to_numpy()[own.order_id]
+        turn_m = np.array(f["turn_m"][rows])
+        delivered = own.outcome.to_numpy() == "delivered"
+        # a delivery turns at the order's distance, an abort short of it, at 10 m/s
+        assert np.array_equal(turn_m[delivered], np.round(distance[delivered]))
+        assert np.all(turn_m[~delivered] < distance[~delivered])
+        assert np.allclose(turn_m[~delivered], 10.0 * (own.turn_s - own.takeoff_s)[~delivered], atol=0.5)
+    assert "aborted" in attempts.outcome.tolist()
+    assert data["arrival_s"] == sorted(np.round(orders.arrival_s, 1).tolist())
+
+
+def test_replenishment_replay_is_the_runs_first_trial(replenishment_run):
+    data = replenishment_data(replenishment_run)
+    summary = pq.read_table(replenishment_run / "summary.parquet").to_pandas().set_index("trial")
+    assert "trial 3 of" in data["title"]
+    assert data["work"][-1] == summary.loc[3, "work"] != summary.loc[4, "work"]
+    assert len(data["work"]) == 900 // 10 + 1 and len(data["x"]) == len(data["work"]) * 12
+    assert data["stored"][0] == 6 * 100.0 + 6 * 200.0
+    assert max(map(abs, data["x"] + data["y"])) <= data["wall_m"]
+
+
+def test_the_track_changes_no_output_and_agrees_with_the_time_series():
+    params = Params(strategy="mobile", n_workers=4, n_chargers=3, ticks=700, trials=2, sample_every=7)
+    plain, tracked = simulate(params), simulate(params, track=True)
+    for name, values in plain.items():
+        assert np.array_equal(values, tracked[name]), name
+    track, series = tracked["track"], tracked["series"][0]
+    assert track["x"].shape == (700 // 7 + 1, 7)
+    assert np.allclose(track["energy"].sum(axis=1), series[:, 8], rtol=1e-12)
+    for phase in range(4):  # robots per phase: workers in columns 0-3, chargers 4-7
+        assert np.array_equal((track["phase"][:, :4] == phase).sum(axis=1), series[:, phase])
+        assert np.array_equal((track["phase"][:, 4:] == phase).sum(axis=1), series[:, 4 + phase])
+
+
+@pytest.mark.parametrize("name, colour", [("base", BASE), ("transfer", TRANSFER), ("work", WORK)])
+def test_the_page_draws_the_areas_where_the_kernel_reads_them(name, colour):
+    x0, x1, y0, y1 = AREAS[name]
+    inside = [((x0 + x1) / 2, 0.0), (x0 + 1e-9, y1 - 1e-9), (x1 - 1e-9, y0 + 1e-9)]
+    assert all(floor_colour(x, y, True) == colour for x, y in inside)
+    assert floor_colour(x0 - 0.01, 0.0, True) != colour and floor_colour(x1 + 0.01, 0.0, True) != colour
+
+
+@pytest.mark.parametrize("run", ["delivery_run", "replenishment_run"])
+def test_the_page_is_self_contained_and_embeds_the_data(run, request):
+    run_dir = request.getfixturevalue(run)
+    html = (run_dir / REPLAY_FILE).read_text()
+    # nothing to fetch: no linked file, stylesheet, image, font or address
+    assert not re.search(r"\b(src|href)\s*=|url\(|@import|https?:|//cdn", html, re.I)
+    expected = replay.scenario_of_run(run_dir).replay_data(run_dir)
+    assert embedded(run_dir / REPLAY_FILE) == json.loads(json.dumps(expected))
+    assert "function makeScene" in html
+
+
+def test_script_ends_in_the_data_are_escaped(tmp_path):
+    html = replay.page({"title": "</script><b>", "duration_s": 1.0}, "function makeScene() {}")
+    data = re.search(r'id="run-data">(.*?)</script>', html, re.S)[1]
+    assert json.loads(data)["title"] == "</script><b>"
+
+
+def _refused(capsys, argv, fragment):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dronefleet: error: ") and err.count("\n") == 1 and fragment in err, err
+
+
+def test_bad_run_folders_are_refused_in_one_line(tmp_path, capsys, delivery_run):
+    _refused(capsys, ["replay", str(tmp_path / "absent")], "is missing")
+    (tmp_path / "file").write_text("x")
+    _refused(capsys, ["replay", str(tmp_path / "file")], "is a file")
+    _refused(capsys, ["replay", str(tmp_path)], "is not a run folder")
+    partial = tmp_path / "partial"
+    shutil.copytree(delivery_run, partial)
+    (partial / "fleet.parquet").unlink()
+    _refused(capsys, ["replay", str(partial)], "not a complete delivery run folder")
+
+
+def test_unwritable_pages_are_refused_in_one_line(tmp_path, capsys, delivery_run, monkeypatch):
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path)], "is a folder")
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "no" / "page.html")], "does not exist")
+
+    def read_only(path, write):
+        raise PermissionError(13, "Permission denied")
+    monkeypatch.setattr(replay, "write_atomic", read_only)
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "page.html")], "Permission denied")
+
+
+def test_replay_writes_where_asked(tmp_path, capsys, replenishment_run):
+    out = tmp_path / "page.html"
+    assert cli.main(["replay", str(replenishment_run), "--out", str(out)]) == 0
+    assert str(out) in capsys.readouterr().out
+    assert embedded(out) == embedded(replenishment_run / REPLAY_FILE)
+
+
+# ------------------------------------------------------------------ in a real browser
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+needs_chromium = pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (Debian: apt-get install "
+                                                              "chromium); the replay page is not tested in a browser")
+
+
+def chromium(page, fragment, output, profile):
+    """Load ``page#fragment`` headless, offline; return (stdout, stderr). Every name lookup
+    fails, so a page that fetched anything would log an error."""
+    done = subprocess.run(
+        [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         f"--user-data-dir={profile}", "--host-resolver-rules=MAP * ~NOTFOUND",
+         "--enable-logging=stderr", "--v=0", "--window-size=1200,800", "--virtual-time-budget=3000",
+         *output, f"{page.as_uri()}#{fragment}"],
+        capture_output=True, text=True, timeout=300)
+    # the page logs nothing: any console line is an error or a failed load
+    console = [line for line in done.stderr.splitlines() if ":CONSOLE" in line]
+    assert not console, console
+    return done.stdout
+
+
+def counters(dom):
+    """The counters table of a dumped page: {label: text}."""
+    return dict(re.findall(r"<tr><td>([^<]*)</td><td>([^<]*)</td></tr>", dom))
+
+
+@needs_chromium
+@pytest.mark.parametrize("run, times", [("delivery_run", (3000, 60000)), ("replenishment_run", (10, 80))])
+def test_the_page_plays_in_chromium_without_errors(run, times, request, tmp_path):
+    page = request.getfixturevalue(run) / REPLAY_FILE
+    shots = []
+    for t in times:
+        shot = tmp_path / f"{t}.png"
+        chromium(page, f"t={t}", [f"--screenshot={shot}"], tmp_path / "profile")
+        shots.append(shot.read_bytes())
+        assert shots[-1].startswith(b"\x89PNG")
+    assert shots[0] != shots[1]
+    dom = chromium(page, f"t={times[1]}", ["--dump-dom"], tmp_path / "profile")
+    assert f'data-rendered="{times[1]}"' in dom  # the player ran to the end and drew that time
+
+
+@needs_chromium
+def test_the_counters_at_the_end_are_the_runs_totals(delivery_run, replenishment_run, tmp_path):
+    summary = pq.read_table(delivery_run / "summary.parquet").to_pylist()[0]
+    shown = counters(chromium(delivery_run / REPLAY_FILE, f"t={summary['horizon_weeks'] * 604800}",
+                              ["--dump-dom"], tmp_path / "profile"))
+    assert shown["orders arrived"] == f"{summary['orders_arrived']:,}"
+    assert shown["delivered"] == f"{summary['delivered']:,}"
+    assert shown["pending"] == f"{summary['pending']:,}"
+    assert shown["attempts aborted"] == f"{summary['aborted_attempts']:,}"
+    trials = pq.read_table(replenishment_run / "summary.parquet").to_pandas().set_index("trial")
+    shown = counters(chromium(replenishment_run / REPLAY_FILE, "t=90", ["--dump-dom"], tmp_path / "profile"))
+    assert shown["work [points]"] == f"{trials.loc[3, 'work']:,}"

@@ -339,6 +339,9 @@ def _add_reproduce_command(commands, arguments):
     p.add_argument("--jobs", type=_at_least(1), metavar="J", help="local processes for the sweeps (default: all CPUs)")
     p.add_argument("--results", default="results", metavar="DIR", help="results root (default: results)")
     p.add_argument("--redraw", action="store_true", help="only redraw the PNGs from the figure's parquet tables")
+    p.add_argument("--theta", type=float, metavar="N",
+                   help="Figure 19's threshold theta (%%), one of its sweep's (default: the one the study's "
+                        "criterion picks, most deliveries and shortest delivery time; see results/README.md)")
     p.add_argument("--check", action="store_true",
                    help="re-run a few of the figure's runs (seconds) and compare them with its runs.parquet; "
                         "exit 1 and list the differences if any")

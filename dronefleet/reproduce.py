@@ -1,6 +1,6 @@
 """Reproduce the study's figures (EXPERIMENTS.md, Figures 16-20; REPLENISHMENT.md, Figures 9-12).
 
-``dronefleet reproduce FIGURE... [--quick] [--jobs J] [--results DIR] [--redraw]``, FIGURE
+``dronefleet reproduce FIGURE... [--quick] [--jobs J] [--results DIR] [--redraw] [--theta N]``, FIGURE
 one or more of fig09..fig12, fig16..fig20, or ``all``. Figures 9-12 (energy replenishment) run their grid
 ``configs/sweeps/replenishment-figNN.toml`` whole (seconds) into ``runs.parquet`` (one row per
 trial) and ``bounds.parquet``: see :mod:`dronefleet.replenishment.study`. Each delivery
@@ -20,7 +20,9 @@ there are reused, so figures sharing a sweep run it once, and ``dronefleet sweep
 or a SLURM job array can fill it beforehand). Each figure then writes its tidy tables
 to ``<results>/<figure>/*.parquet`` and draws its PNGs from those files alone, so
 ``--redraw`` redraws without simulating or reading a sweep. ``--quick`` writes under
-``<results>/quick/``.
+``<results>/quick/``. Figure 19 sets beside learning the threshold(theta) that the study's
+criterion picks (:func:`dronefleet.delivery.analysis.threshold_table`), or the one
+``--theta`` names.
 
 Every figure also writes ``<results>/<figure>/runs.parquet``: one row per run it is drawn
 from, with its sweep, its run id (``rule=random,tau_minutes=25.0,seed=3``), its grid values
@@ -90,9 +92,10 @@ def sweeps_dir():
 class Study:
     """The study's sweeps under one results root: loaded (validated) once, run on demand."""
 
-    def __init__(self, results, quick=False, jobs=None, log=print):
+    def __init__(self, results, quick=False, jobs=None, log=print, theta=None):
         self.root = Path(results) / "quick" if quick else Path(results)
         self.quick = quick
+        self.theta = theta      # Figure 19's threshold, %; None: the study's criterion picks it
         self.jobs = jobs or available_cpus()
         self.log = log
         self._sweeps = {}
@@ -286,6 +289,9 @@ def tidy_fig19(study):
     thresholds = analysis.run_outcomes(study.table("thresholds", "summary"), by=by)
     table, best = analysis.threshold_table(thresholds)
     _write_parquet(table, d / "thresholds.parquet")
+    chosen_by = "the study's criterion" if study.theta is None else "--theta"
+    best = best if study.theta is None else study.theta
+    study.log(f"  fig19: threshold(theta = {best:g}) beside learning, chosen by {chosen_by}", flush=True)
     horizon = study.horizon_s("thresholds")
     learning = analysis.run_outcomes(study.table("rules", "summary", rule="least_confident"))
     backlog = analysis.backlog_by_arrival_week(study.table("thresholds", "orders", theta=best), horizon, by=by)
@@ -331,11 +337,28 @@ DRAW = {"fig16": draw_fig16, "fig17": draw_fig17, "fig18": draw_fig18, "fig19": 
         **{figure: functools.partial(replenishment.draw, figure=figure) for figure in REPLENISHMENT_FIGURES}}
 
 
-def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, log=print):
+def _check_theta(study, figures, redraw):
+    """Refuse a ``--theta`` that cannot apply, before any run: one SweepError line."""
+    theta = study.theta
+    if theta is None:
+        return
+    if "fig19" not in figures:
+        raise SweepError(f"--theta {theta:g} chooses Figure 19's threshold: reproduce fig19 (or all) with it")
+    if redraw:
+        raise SweepError(f"--theta {theta:g} chooses the runs in fig19's tables, which --redraw only draws: "
+                         "give one of them")
+    sweep = study.sweep("thresholds")
+    if theta not in sweep.grid["theta"]:
+        raise SweepError(f"--theta {theta:g} is not a threshold of {sweep.path.name}: one of "
+                         f"{', '.join(f'{value:g}' for value in sweep.grid['theta'])}")
+
+
+def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, log=print, theta=None):
     """Reproduce ``figures`` (names of :data:`FIGURES`): run missing sweeps, tidy, draw.
 
-    With ``redraw``, only draw, from the tidy parquet tables already written. Returns the
-    paths of the figure files, by figure.
+    With ``redraw``, only draw, from the tidy parquet tables already written. ``theta`` (%)
+    is Figure 19's threshold, one of its sweep's; None lets the study's criterion pick it.
+    Returns the paths of the figure files, by figure.
     """
     from .figstyle import require_matplotlib
 
@@ -343,7 +366,8 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
         require_matplotlib()  # refuse before hours of runs, not after
     except ImportError as error:
         raise SweepError(str(error)) from None
-    study = Study(results, quick, jobs, log)
+    study = Study(results, quick, jobs, log, theta)
+    _check_theta(study, figures, redraw)
     if not redraw:
         replenishment.run_together(study, [figure for figure in figures if figure in REPLENISHMENT_FIGURES])
     drawn = {}
@@ -421,6 +445,8 @@ def command(args):
     if args.check:
         if args.redraw:
             raise SweepError("--check re-runs runs and --redraw only draws: give one of them")
+        if args.theta is not None:
+            raise SweepError("--check re-runs runs and --theta chooses what fig19 draws: give one of them")
         differences = [line for figure in figures for line in check(figure, args.results, args.quick)]
         for line in differences:
             print(f"  differs: {line}")
@@ -428,7 +454,7 @@ def command(args):
               f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
               f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
-    reproduce(figures, args.results, args.quick, args.jobs, args.redraw)
+    reproduce(figures, args.results, args.quick, args.jobs, args.redraw, theta=args.theta)
     print(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s")
     return 0
 

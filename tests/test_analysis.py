@@ -212,7 +212,7 @@ def test_winner_soh_grid_is_exact_decimals_and_refuses_several_weeks():
 # ---------------------------------------------------------------------------- thresholds
 
 
-def test_threshold_table_by_hand_and_the_best_theta_breaks_ties_by_delivery_time():
+def test_threshold_table_by_hand_and_equal_deliveries_share_a_rank():
     rows = [  # theta, tau, delivered, median delivery time (s), aborted %
         (50.0, 15.0, 100, 600.0, 10.0), (50.0, 20.0, 80, 300.0, 20.0),
         (70.0, 15.0, 120, 900.0, 5.0), (70.0, 20.0, 100, 700.0, 5.0),
@@ -226,10 +226,45 @@ def test_threshold_table_by_hand_and_the_best_theta_breaks_ties_by_delivery_time
     assert table["delivered_mean"].tolist() == [90.0, 110.0, 110.0]
     assert table["median_delivery_time_s"].tolist() == [450.0, 800.0, 300.0]
     assert table["aborted_pct_mean"].tolist() == [15.0, 5.0, 0.0]
-    # 70 and 90 deliver as many; 90 is faster.
+    # 70 and 90 deliver as many (both rank 1); 90 is also the fastest.
+    assert table["delivered_rank"].tolist() == [3, 1, 1] and table["delivery_time_rank"].tolist() == [2, 3, 1]
     assert best == 90.0 and table["best"].tolist() == [False, False, True]
     with pytest.raises(ValueError, match="threshold runs only"):
         analysis.threshold_table(pd.concat([outcomes, outcomes.assign(rule="random")]))
+
+
+def thresholds(runs):
+    """Threshold runs' outcomes from ``{theta: [(delivered, median delivery time s), ...]}``."""
+    rows = [(theta, seed, delivered, time) for theta, pairs in runs.items()
+            for seed, (delivered, time) in enumerate(pairs)]
+    frame = pd.DataFrame(rows, columns=["theta", "seed", "delivered", "median_delivery_time_s"])
+    return frame.assign(rule="threshold", tau_minutes=15.0, aborted_pct=0.0, pending=0, backlog_age_s=0.0)
+
+
+@pytest.mark.parametrize("runs, best", [
+    # One theta has the most deliveries and the shortest time: it wins outright.
+    ({50.0: [(100, 900.0)], 80.0: [(300, 100.0)], 90.0: [(200, 500.0)]}, 80.0),
+    # The measures conflict: 60 delivers most but is the slowest (ranks 1 + 3); 70 is second
+    # and fastest (2 + 1): the lower rank sum wins over the most deliveries.
+    ({60.0: [(300, 900.0)], 70.0: [(290, 100.0)], 80.0: [(200, 500.0)]}, 70.0),
+    # A conflict with equal rank sums (1 + 2 and 2 + 1): the most deliveries win.
+    ({70.0: [(300, 500.0)], 80.0: [(290, 100.0)]}, 70.0),
+    # Equal on both measures: the lower theta.
+    ({80.0: [(300, 100.0)], 90.0: [(300, 100.0)]}, 80.0),
+    # Medians over runs, not means: 50's one big run lifts its mean (400) above 60's (200), not its median;
+    # 60's one slow run lifts its mean delivery time (3066.7 s) above 50's (900 s), not its median.
+    ({50.0: [(100, 100.0), (100, 100.0), (1000, 100.0)], 60.0: [(200, 100.0)] * 3}, 60.0),
+    ({50.0: [(100, 900.0), (100, 900.0)], 60.0: [(100, 100.0), (100, 100.0), (100, 9000.0)]}, 60.0),
+])
+def test_the_best_theta_has_the_most_deliveries_and_shortest_delivery_times_by_rank_sum(runs, best):
+    table, chosen = analysis.threshold_table(thresholds(runs))
+    assert chosen == best and table.loc[table["best"], "theta"].tolist() == [best]
+
+
+def test_a_theta_that_delivered_nothing_has_no_delivery_time_and_ranks_last_on_it():
+    table, best = analysis.threshold_table(thresholds({90.0: [(50, 700.0)], 100.0: [(0, np.nan), (0, np.nan)]}))
+    assert table["delivery_time_rank"].tolist() == [1, 2] and table["delivered_rank"].tolist() == [1, 2]
+    assert best == 90.0
 
 
 def test_best_threshold_runs_are_relabelled_to_sit_beside_learning():

@@ -1,5 +1,6 @@
 """``dronefleet reproduce``: every figure in quick mode, its tidy tables, and redrawing without simulating."""
 
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -92,6 +93,41 @@ def test_a_second_run_reuses_every_run(quick, capsys):
     reproduce.reproduce(["fig19"], root.parent, quick=True, jobs=1,
                         log=lambda *a, **k: lines.append(" ".join(map(str, a))))
     assert any("sweep thresholds" in line and "ran 0 " in line and "72 reused" in line for line in lines)
+
+
+def test_figure_19_shows_the_best_theta_by_default_and_the_one_theta_names(quick, tmp_path):
+    root, _, _ = quick
+    best = pd.read_parquet(root / "fig19" / "thresholds.parquet").query("best").theta.item()
+    for name in ("outcomes", "backlog"):
+        rules = pd.read_parquet(root / "fig19" / f"{name}.parquet").rule.unique().tolist()
+        assert sorted(rules) == ["least_confident", f"threshold({best:g})"]
+    other = 100.0 if best != 100.0 else 50.0
+    shutil.copytree(root, tmp_path / "quick")  # a copy: the module's tables stay the default's
+    reproduce.reproduce(["fig19"], tmp_path, quick=True, jobs=1, theta=other, log=lambda *a, **k: None)
+    for name in ("outcomes", "backlog"):
+        rules = pd.read_parquet(tmp_path / "quick" / "fig19" / f"{name}.parquet").rule.unique().tolist()
+        assert sorted(rules) == ["least_confident", f"threshold({other:g})"]
+    # The table still marks the criterion's choice.
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "quick" / "fig19" / "thresholds.parquet"),
+                                  pd.read_parquet(root / "fig19" / "thresholds.parquet"))
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["fig19", "--theta", "75"], "--theta 75 is not a threshold of thresholds.toml: one of 50, 60, 70, 80, 90, 100"),
+    (["fig16", "--theta", "80"], "--theta 80 chooses Figure 19's threshold: reproduce fig19 (or all) with it"),
+    (["fig19", "--theta", "80", "--redraw"], "--theta 80 chooses the runs in fig19's tables, which --redraw"),
+    (["fig19", "--theta", "80", "--check"], "--check re-runs runs and --theta chooses what fig19 draws"),
+])
+def test_a_theta_that_cannot_apply_is_refused_in_one_line_before_any_run(tmp_path, monkeypatch, capsys,
+                                                                         arguments, message):
+    def forbidden(*args, **kwargs):
+        raise AssertionError("no run may start with a --theta that cannot apply")
+
+    monkeypatch.setattr(reproduce, "run_sweep", forbidden)
+    assert cli.main(["reproduce", *arguments, "--quick", "--results", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.splitlines()) == 1
+    assert not any(tmp_path.iterdir())
 
 
 def test_redrawing_reads_only_the_parquet_tables(quick, monkeypatch):

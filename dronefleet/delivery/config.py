@@ -424,8 +424,7 @@ def _check_one(p: Param, value: Any) -> Any:
             return value
         allowed = p.constraint.allowed()
         if allowed is not None and value not in allowed:
-            what = getattr(p.constraint, "refusal", "is not allowed")
-            raise ConfigError(f"{q} = {_show(value)} {what}{_suggest(value, allowed)}. "
+            raise ConfigError(f"{q} = {_show(value)} is not allowed{_suggest(value, allowed)}. "
                               f"Allowed: {', '.join(map(repr, allowed))}", [p.name])
         return value
     if p.type is tuple:

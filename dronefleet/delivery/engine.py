@@ -662,9 +662,9 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
 def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel):
     """Advertise one order at tick time ``t`` and resolve its auction. False if refused.
 
-    Immediate bids are resolved by the rule (``rule_kernel``: a plugin's, see ``advance``). With reservations and nobody bidding now, the
-    idle UAVs bid for later (:func:`_reservation_bids`): the lowest wait wins, and the
-    winner waits at the FC.
+    Immediate bids are resolved by the rule (``rule_kernel``: a plugin's, see ``advance``). With
+    reservations and nobody bidding now, the idle UAVs bid for later (:func:`_reservation_bids`):
+    the lowest wait wins, and the winner waits at the FC.
     """
     pos = _rank(book.queue_tree, counters[LAST_ADVERTISED])
     if pos == counters[QUEUE_LEN]:

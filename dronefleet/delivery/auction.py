@@ -12,30 +12,64 @@ highest score wins and ties go to the highest UAV id, so every bidder can
 evaluate the outcome locally. A rule that wants the lowest value to win
 returns its negation as the score.
 
-Adding a rule: write the compiled function, give it the next code in ``RULES``
-(saying when it bids) and a branch in ``bid``. The dispatch is static code because
-numba's disk cache cannot key a kernel on a function passed as argument (every new
-process would recompile the engine). ``bids_on`` lets the engine jump over
-advertisement ticks at which provably nobody can bid (the result is the same as
-evaluating every tick):
+Every rule declares ``bids_on``, which lets the engine jump over advertisement ticks
+at which provably nobody can bid (the result is the same as evaluating every tick):
 
 - ``"policy"``: the rule bids exactly when f >= 0;
 - ``"soc_threshold"``: it bids exactly when SoC >= theta;
 - ``"any"``: anything else (every tick is evaluated).
+
+A rule that bids otherwise than it declares gives results that depend on the skipped ticks.
+
+Built-in rules have a code in ``RULES`` and a branch in ``bid``: the dispatch is static
+code, so the engine is compiled once and loaded from numba's disk cache.
+
+Plugin rules (no change to the package): the config's ``rule`` is either the name of an
+entry point in the group ``dronefleet.winner_rules`` or a dotted path
+``"package.module:function"``. Either names a numba ``@njit`` function of the signature
+above, returning ``(bool, float)``, with an attribute ``bids_on`` (one of the three above)::
+
+    @njit(cache=True)
+    def lowest_soc(f, w_norm, soc, theta, rng):
+        if f >= 0.0:
+            return True, -soc
+        return False, 0.0
+
+    lowest_soc.bids_on = "policy"
+
+The engine receives a plugin as a first-class function (numba ``FunctionType`` of
+``RULE_SIGNATURE``): one compilation of the engine, disk-cached like the built-in one,
+serves every plugin, and calls the plugin through a pointer (no inlining). Each process
+compiles the plugin itself once unless it is ``cache=True``. :func:`resolve_rule` loads
+and checks a rule by name. Plugins cannot be ``base_rule`` of ``reservation``.
 
 ``reservation`` (MODEL.md section 9) is not a kernel of this kind: it lets a base rule
 (config ``base_rule``) resolve the immediate bids and adds reservation bids, whose
 forecast is :func:`reservation_wait`; the engine runs the two phases.
 """
 
+import functools
+import importlib
+from importlib.metadata import entry_points
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof, types
+from numba.core.dispatcher import Dispatcher
+from numba.core.errors import NumbaError
 
+from ..config import _suggest
 from ..fpmath import log
 
 BIDS_ON = {"policy": 0, "soc_threshold": 1, "any": 2}
+
+#: Entry-point group of plugin rules: name -> compiled rule function.
+ENTRY_POINT_GROUP = "dronefleet.winner_rules"
+#: The code of every plugin rule: the engine calls its kernel instead of ``bid``'s branches.
+PLUGIN = -2
+#: What the engine passes to a rule and expects back (see the module doc).
+RULE_ARGS = (types.float64, types.float64, types.float64, types.float64, typeof(np.random.default_rng(0)))
+RULE_SIGNATURE = types.Tuple((types.boolean, types.float64))(*RULE_ARGS)
 
 
 @njit(cache=True)
@@ -94,9 +128,10 @@ def reservation_wait(f_soc, w_soc, soc, soc_mean, soc_std, charge_rate):
 class Rule(NamedTuple):
     """A registered winner rule.
 
-    ``code`` selects it in ``bid``, ``kernel`` is its compiled function, ``bids_on`` (a key
-    of ``BIDS_ON``) says when it bids, and ``reserves`` marks the reservation variant,
-    which runs a base rule's kernel for the immediate bids.
+    ``code`` selects it in ``bid`` (``PLUGIN``: a plugin, called through ``kernel``), ``kernel``
+    is its compiled function, ``bids_on`` (a key of ``BIDS_ON``) says when it bids, and
+    ``reserves`` marks the reservation variant, which runs a base rule's kernel for the
+    immediate bids.
     """
 
     code: int
@@ -117,9 +152,90 @@ RULES = {
 BASE_RULES = tuple(name for name, rule in RULES.items() if rule.bids_on == "policy" and not rule.reserves)
 
 
+class RuleError(ValueError):
+    """A rule name that names no usable rule; the message completes "rule = 'name' ..."."""
+
+
+def installed_plugins() -> tuple[str, ...]:
+    """Names of the plugin rules installed as entry points, sorted."""
+    return tuple(sorted(ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)))
+
+
+def resolve_rule(name: str) -> Rule:
+    """The rule called ``name``: built in, an installed entry point, or ``"module:function"``.
+
+    Raises :class:`RuleError` saying what is wrong and what is allowed.
+    """
+    if name in RULES:
+        return RULES[name]
+    return _plugin(name)
+
+
+@functools.cache  # successes only: a failed lookup raises, and is tried again next time
+def _plugin(name: str) -> Rule:
+    if ":" in name:
+        kernel = _import_path(name)
+    else:
+        found = entry_points(group=ENTRY_POINT_GROUP, name=name)
+        if not found:
+            names = tuple(RULES) + installed_plugins()
+            raise RuleError(f"is not a registered winner rule{_suggest(name, names)}. Allowed: "
+                            f"{', '.join(map(repr, names))}, or a plugin's 'package.module:function'")
+        entry_point = next(iter(found))
+        try:
+            kernel = entry_point.load()
+        except Exception as e:  # the plugin's own error, whatever it is: the user must see it
+            raise RuleError(f"is an entry point of {ENTRY_POINT_GROUP} ({entry_point.value}) that fails to "
+                            f"load: {type(e).__name__}: {e}") from None
+    return _checked(kernel)
+
+
+def _import_path(path: str):
+    """The object at ``"package.module:attribute"``."""
+    module_name, _, attribute = path.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as e:  # ImportError, or whatever the module raises on import
+        raise RuleError(f"names module {module_name!r}, which cannot be imported ({type(e).__name__}: {e}); "
+                        "allowed: a built-in rule, an installed plugin or 'package.module:function'") from None
+    try:
+        return functools.reduce(getattr, attribute.split("."), module)
+    except AttributeError:
+        raise RuleError(f"names {attribute!r}, which module {module_name!r} does not have") from None
+
+
+def _checked(kernel) -> Rule:
+    """The plugin rule of ``kernel`` if it is a numba-compiled function of the contract (compiled for it here)."""
+    if not isinstance(kernel, Dispatcher):
+        raise RuleError(f"is a {type(kernel).__name__}, not a numba @njit function "
+                        "rule(f, w_norm, soc, theta, rng) -> (bool, float)")
+    bids_on = getattr(kernel, "bids_on", None)
+    if bids_on not in BIDS_ON:
+        raise RuleError(f"has bids_on = {bids_on!r}; set the function's attribute bids_on to one of "
+                        f"{', '.join(map(repr, BIDS_ON))} (see dronefleet.delivery.auction)")
+    try:
+        # With the return type given, numba converts what the rule returns (a literal True, an int score).
+        kernel.compile(RULE_SIGNATURE)
+    except (NumbaError, TypeError) as e:  # TypeError: another number of arguments
+        first = str(e).strip().splitlines()[0]
+        raise RuleError(f"does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float) with floats "
+                        f"and a numpy Generator: {first}") from None
+    # An earlier call with the same arguments may have compiled it to return something else.
+    returns = kernel.overloads[RULE_ARGS].signature.return_type
+    if returns != RULE_SIGNATURE.return_type:
+        raise RuleError(f"is compiled to return {returns}, not (bool, float64)")
+    return Rule(PLUGIN, kernel, bids_on)
+
+
 @njit(cache=True)
-def bid(rule, f, w_norm, soc, theta, rng):
-    """Whether a UAV bids and its score under the rule with code ``rule`` (see ``RULES``)."""
+def bid(rule, kernel, f, w_norm, soc, theta, rng):
+    """Whether a UAV bids and its score under the rule with code ``rule`` (see ``RULES``).
+
+    ``kernel`` is None for a built-in rule (the branch below is then compiled away) and a
+    plugin's function (of type ``FunctionType(RULE_SIGNATURE)``) for ``PLUGIN``.
+    """
+    if kernel is not None:
+        return kernel(f, w_norm, soc, theta, rng)
     if rule == 0:
         return least_confident(f, w_norm, soc, theta, rng)
     if rule == 1:

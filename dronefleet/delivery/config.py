@@ -121,23 +121,30 @@ class Options:
 
 
 class RegisteredRule:
-    """One of the winner rules registered in ``dronefleet.delivery.auction.RULES``.
+    """One of the winner rules registered in ``dronefleet.delivery.auction.RULES``, or a plugin rule.
 
     Imported lazily so that ``config`` imports nothing heavy (and no cycle).
-    ``base`` restricts it to the rules that can resolve reservation's immediate bids.
+    ``base`` restricts it to the built-in rules that can resolve reservation's immediate
+    bids; otherwise a plugin (entry point or ``"module:function"``) is allowed too, and
+    loaded and checked by :func:`dronefleet.delivery.auction.resolve_rule`.
     """
 
     def __init__(self, base: bool = False):
         self.base = base
 
-    def allowed(self) -> tuple[str, ...]:
-        from .auction import BASE_RULES, RULES
+    def problem(self, value: str) -> str | None:
+        """Why ``value`` names no usable rule (the end of a one-line message), or None."""
+        from .auction import BASE_RULES, RuleError, resolve_rule
 
-        return BASE_RULES if self.base else tuple(RULES)
-
-    @property
-    def refusal(self) -> str:
-        return "is not a rule that bids on its policy" if self.base else "is not a registered winner rule"
+        if self.base:
+            return None if value in BASE_RULES else (f"is not a rule that bids on its policy"
+                                                     f"{_suggest(value, BASE_RULES)}. "
+                                                     f"Allowed: {', '.join(map(repr, BASE_RULES))}")
+        try:
+            resolve_rule(value)
+        except RuleError as e:
+            return str(e)
+        return None
 
 
 class AnyText:
@@ -243,7 +250,8 @@ class Config:
                    "abort threshold xi [fraction of take-off SoC]")
     # [auction]
     rule: str = _p("auction", "least_confident", str, RegisteredRule(),
-                   "winner rule, a name registered in dronefleet.delivery.auction.RULES")
+                   "winner rule: a name registered in dronefleet.delivery.auction.RULES, an installed "
+                   "plugin (entry point group dronefleet.winner_rules) or 'package.module:function'")
     base_rule: str = _p("auction", "least_confident", str, RegisteredRule(base=True),
                         "rule that resolves the immediate bids under 'reservation'")
     theta: float = _p("auction", 50.0, float, Interval(0, 100, "both"),
@@ -409,10 +417,14 @@ def _check_one(p: Param, value: Any) -> Any:
         if not isinstance(value, str):
             raise ConfigError(f"{q} must be a string, got {_type_name(value)} {_show(value)}",
                               [p.name])
+        if isinstance(p.constraint, RegisteredRule):
+            problem = p.constraint.problem(value)
+            if problem:
+                raise ConfigError(f"{q} = {_show(value)} {problem}", [p.name])
+            return value
         allowed = p.constraint.allowed()
         if allowed is not None and value not in allowed:
-            what = getattr(p.constraint, "refusal", "is not allowed")
-            raise ConfigError(f"{q} = {_show(value)} {what}{_suggest(value, allowed)}. "
+            raise ConfigError(f"{q} = {_show(value)} is not allowed{_suggest(value, allowed)}. "
                               f"Allowed: {', '.join(map(repr, allowed))}", [p.name])
         return value
     if p.type is tuple:

@@ -21,9 +21,9 @@ the attempt table between calls.
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
-from .auction import bid, reservation_wait
+from .auction import RULE_SIGNATURE, bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
 from ..fpmath import log
 from .policy import decision, sgd_step
@@ -659,12 +659,12 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
 
 
 @njit(cache=True)
-def _auction(book, fleet, attempts, counters, params, table, rng, t):
+def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel):
     """Advertise one order at tick time ``t`` and resolve its auction. False if refused.
 
-    Immediate bids are resolved by the rule. With reservations and nobody bidding now, the
-    idle UAVs bid for later (:func:`_reservation_bids`): the lowest wait wins, and the
-    winner waits at the FC.
+    Immediate bids are resolved by the rule (``rule_kernel``: a plugin's, see ``advance``). With
+    reservations and nobody bidding now, the idle UAVs bid for later (:func:`_reservation_bids`):
+    the lowest wait wins, and the winner waits at the FC.
     """
     pos = _rank(book.queue_tree, counters[LAST_ADVERTISED])
     if pos == counters[QUEUE_LEN]:
@@ -690,7 +690,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
         soc = soc_after_charging(soc_ref[i], t - t_ref[i], params.charge_rate)
         f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
         w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
-        bids, score = bid(params.rule, f, w_norm, soc, params.theta, rng)
+        bids, score = bid(params.rule, rule_kernel, f, w_norm, soc, params.theta, rng)
         if not bids:
             # With reservations the UAV's step waits for the second phase.
             if not params.reserves and not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
@@ -742,11 +742,13 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t):
 
 
 @njit(cache=True)
-def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop):
+def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop, rule_kernel=None):
     """Process every event at or before ``t_stop`` (seconds), in the order of the module doc.
 
     All arguments but ``params``, ``table`` (compiled supervisor, (K, states, events)
-    int64) and ``rng`` (random-bid stream) are updated in place. Returns DONE,
+    int64), ``rng`` (random-bid stream) and ``rule_kernel`` are updated in place. ``rule_kernel``
+    is None for a built-in rule (``params.rule``) and a plugin rule's function otherwise: call
+    :func:`advance_plugin` for that, which passes it as a first-class function. Returns DONE,
     ATTEMPTS_FULL (stopped before an event that needs a new attempt row: grow
     ``attempts`` and call again), SUPERVISOR_REFUSED (the UAV and event are in
     ``counters``) or INVALID_STATE (the next event time is NaN or fits no event, as
@@ -786,7 +788,7 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
             counters[NEXT_ORDER] = order + 1
             _enqueue(book, fleet, counters, order)
         elif t_tick == t and advertising:
-            if not _auction(book, fleet, attempts, counters, params, table, rng, t):
+            if not _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel):
                 return SUPERVISOR_REFUSED
             counters[NEXT_TICK] = tick + 1
         elif t_sample == t and counters[NEXT_SAMPLE] < n_samples:
@@ -806,3 +808,21 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop)
             # While advertising is suspended, ticks are not held: the next one is the first
             # grid instant at or after now.
             counters[NEXT_TICK] = max(counters[NEXT_TICK], first_tick_at_or_after(t, interval))
+
+
+#: A plugin rule's type in the engine: a function of the rule signature, whichever it is. The
+#: engine's specialisation for it does not depend on the plugin, so numba caches it on disk.
+RULE_KERNEL = types.FunctionType(RULE_SIGNATURE)
+
+
+def advance_plugin(book, fleet, attempts, series, counters, params, table, rng, t_stop, rule_kernel):
+    """:func:`advance` with the plugin rule ``rule_kernel`` (a numba dispatcher of the rule signature).
+
+    Called with the dispatcher itself, numba would compile a specialisation of ``advance`` per
+    plugin and per process (its cache key is the dispatcher object, which no other process
+    has), and add it to the disk cache each time; the specialisation for RULE_KERNEL is
+    compiled once, cached, and takes any plugin.
+    """
+    args = (book, fleet, attempts, series, counters, params, table, rng, t_stop)
+    entry = advance.compile(tuple(advance.typeof_pyval(a) for a in args) + (RULE_KERNEL,))
+    return entry(*args, rule_kernel)

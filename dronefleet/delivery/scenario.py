@@ -35,7 +35,8 @@ def _allowed(constraint):
         return " | ".join(map(repr, constraint.values))
     if isinstance(constraint, AnyText):
         return "any text"
-    return "a registered winner rule"  # RegisteredRule: listed by dronefleet.delivery.auction.RULES
+    # RegisteredRule: dronefleet.delivery.auction.RULES, and (not for base_rule) plugins
+    return "a registered winner rule" if constraint.base else "a registered winner rule or a plugin rule"
 
 
 def _field(p):

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import engine
-from .auction import BIDS_ON, RULES
+from .auction import BIDS_ON, PLUGIN, RULES, resolve_rule
 from .config import SECONDS_PER_WEEK
 from .energy import charge_rate, config_power, drain_per_watt
 from .fleet import load_fleet
@@ -41,6 +41,7 @@ class RunState:
     mass_kg: np.ndarray
     period: int
     max_attempts: int       # rows the attempt table may grow to (attempt_limit)
+    rule_kernel: object = None  # a plugin rule's compiled function; None for a built-in rule
 
 
 @dataclass
@@ -126,7 +127,7 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
     soh = drawn_soh if soh is None else np.asarray(soh, dtype=np.float64)
     features = standardise(np.column_stack([orders.distance_m, orders.mass_kg, np.zeros(n)]), mean, std)
 
-    rule = RULES[config.rule]
+    rule = resolve_rule(config.rule)
     automaton = load_supervisor(BUILTIN_CONTROLLER if supervisor is None else supervisor)
     table = automaton.transition_table(engine.EVENT_NAMES)
     bids_on = BIDS_ON[rule.bids_on]
@@ -169,7 +170,8 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
         rule=RULES[config.base_rule].code if rule.reserves else rule.code, bids_on=bids_on,
         reserves=rule.reserves)
     return RunState(book, fleet, _attempt_table(max(64, n)), series, counters, params, table,
-                    bid_rng, orders.mass_kg, period, max(attempt_limit(config), 64, n))
+                    bid_rng, orders.mass_kg, period, max(attempt_limit(config), 64, n),
+                    rule.kernel if rule.code == PLUGIN else None)
 
 
 def _attempt_table(capacity, old=None):
@@ -193,8 +195,11 @@ def advance(state, t_stop):
     has no valid next event (non-finite inputs).
     """
     while True:
-        status = engine.advance(state.book, state.fleet, state.attempts, state.series, state.counters,
-                                state.params, state.table, state.bid_rng, t_stop)
+        args = (state.book, state.fleet, state.attempts, state.series, state.counters,
+                state.params, state.table, state.bid_rng, t_stop)
+        # A built-in rule leaves rule_kernel out (passing None would be another specialisation).
+        status = (engine.advance(*args) if state.rule_kernel is None
+                  else engine.advance_plugin(*args, state.rule_kernel))
         if status == engine.DONE:
             return
         if status == engine.ATTEMPTS_FULL:

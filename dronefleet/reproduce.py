@@ -414,6 +414,8 @@ def command(args):
     named = " ".join(args.figure)
     # --check only reads, so it reads the committed results unless --out names another root.
     root = args.out or (COMMITTED_RESULTS if args.update_results or args.check else DEFAULT_OUT)
+    if root.exists() and not root.is_dir():
+        raise SweepError(f"--out {str(root)!r} is a file: give the folder to write the results under")
     start = time.perf_counter()
     if args.check:
         if args.redraw:

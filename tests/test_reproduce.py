@@ -209,3 +209,12 @@ def test_out_and_update_results_exclude_each_other(tmp_path, capsys):
         cli.main(["reproduce", "fig17", "--out", str(tmp_path), "--update-results"])
     assert exit.value.code == 2
     assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_an_out_that_is_a_file_is_refused_in_one_line(tmp_path, capsys):
+    taken = tmp_path / "notes.txt"
+    taken.write_text("mine\n")
+    assert cli.main(["reproduce", "fig10", "--quick", "--out", str(taken)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"dronefleet: error: --out {str(taken)!r} is a file: give the folder to write the results under\n"
+    assert taken.read_text() == "mine\n"

@@ -332,18 +332,27 @@ def _add_reproduce_command(commands, arguments):
     p.add_argument("figure", nargs="+", choices=(*reproduce.FIGURES, "all"),
                    help="one or more figures, or all (figures asked for together share their runs)")
     p.add_argument("--quick", action="store_true",
-                   help=f"a check in seconds, under <results>/quick/: delivery figures with seeds "
+                   help=f"a check in seconds, under <out>/quick/: delivery figures with seeds "
                         f"{reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]} and "
                         f"{reproduce.QUICK_CHANGES['horizon_weeks']:g} weeks, replenishment figures with "
                         f"{reproduce.replenishment.QUICK_TRIALS} trials of {reproduce.replenishment.QUICK_TICKS} ticks")
     p.add_argument("--jobs", type=_at_least(1), metavar="J", help="local processes for the sweeps (default: all CPUs)")
-    p.add_argument("--results", default="results", metavar="DIR", help="results root (default: results)")
-    p.add_argument("--redraw", action="store_true", help="only redraw the PNGs from the figure's parquet tables")
+    root = p.add_mutually_exclusive_group()
+    root.add_argument("--out", type=Path, metavar="DIR",
+                      help=f"results root: the sweeps' runs in DIR/<sweep>/, each figure's tables and drawings in "
+                           f"DIR/<figure>/ (default: {reproduce.DEFAULT_OUT}; with --check: "
+                           f"{reproduce.COMMITTED_RESULTS})")
+    root.add_argument("--update-results", action="store_true",
+                      help=f"write into the committed {reproduce.COMMITTED_RESULTS}/ (from the repository's root), "
+                           "refreshing its figures")
+    p.add_argument("--redraw", action="store_true",
+                   help="only redraw the figures (PNG, PDF, SVG) from their parquet tables in the results root")
     p.add_argument("--theta", type=float, metavar="N",
                    help="Figure 19's threshold theta (%%), one of its sweep's (default: the one the study's "
                         "criterion picks, most deliveries and shortest delivery time; see results/README.md)")
     p.add_argument("--check", action="store_true",
-                   help="re-run a few of the figure's runs (seconds) and compare them with its runs.parquet; "
+                   help="re-run a few of the figure's runs (seconds) and compare them with its runs.parquet "
+                        f"(default: the committed {reproduce.COMMITTED_RESULTS}/); "
                         "exit 1 and list the differences if any")
     p.set_defaults(func=reproduce.command)
 

@@ -1,16 +1,78 @@
 """Figure style shared by every scenario's figures: matplotlib loaded on demand, one figure
-on the Agg canvas under matplotlib's default style, saved reproducibly.
+on the Agg canvas in the project's style, saved reproducibly as PNG, PDF and SVG.
 
 matplotlib is an optional dependency (``pip install 'dronefleet[plots]'``), imported
 only when a figure is drawn. Figures are ``matplotlib.figure.Figure`` objects on the Agg
 canvas, never pyplot, so nothing stays registered in pyplot's global state; they are
-drawn under matplotlib's default style whatever the user's matplotlibrc, and saved
-without the "Software" entry, so the same table gives the same bytes.
+drawn under matplotlib's default style plus :data:`RC`, whatever the user's matplotlibrc,
+and saved without dates or software versions, so the same table gives the same bytes in
+every format.
+
+Each winner rule and each replenishment strategy has one :class:`Style` in every figure:
+the study's colours (least_confident green, most_confident pink, random orange) from the
+Okabe-Ito palette, which stays distinct under the common colour-vision deficiencies, and a
+marker, line style and hatch of its own, so that lines and boxes stay apart in greyscale
+too. Figures have no titles: their captions live in ``results/README.md``.
 """
 
+import itertools
+import os
 from contextlib import contextmanager
+from pathlib import Path
+from typing import NamedTuple
 
 DPI = 150
+#: The formats every figure is written in, side by side (same name, these suffixes).
+FORMATS = ("png", "pdf", "svg")
+#: Okabe & Ito's colour-blind-safe palette (Color Universal Design), by name.
+OKABE_ITO = {"orange": "#E69F00", "sky blue": "#56B4E9", "bluish green": "#009E73", "yellow": "#F0E442",
+             "blue": "#0072B2", "vermillion": "#D55E00", "reddish purple": "#CC79A7", "black": "#000000"}
+#: What the writers would otherwise stamp into a file: dates and software versions.
+_NO_STAMPS = {"png": {"Software": None}, "pdf": {"Creator": None, "Producer": None, "CreationDate": None},
+              "svg": {"Creator": None, "Date": None}}
+
+
+class Style(NamedTuple):
+    """How one rule or strategy is drawn: ``colour`` for fills and lines, ``marker`` for
+    points, ``linestyle`` for lines and whiskers, ``hatch`` for boxes and bars."""
+    colour: str
+    marker: str
+    linestyle: object
+    hatch: str
+
+
+#: Winner rules: the study's colours for its three rules, clear others for the baselines.
+RULE_STYLES = {
+    "least_confident": Style(OKABE_ITO["bluish green"], "o", "-", ""),
+    "most_confident": Style(OKABE_ITO["reddish purple"], "s", "--", "//"),
+    "random": Style(OKABE_ITO["orange"], "^", ":", ".."),
+    "threshold": Style(OKABE_ITO["blue"], "D", "-.", "xx"),
+    "reservation": Style(OKABE_ITO["vermillion"], "v", (0, (5, 1, 1, 1)), "\\\\"),
+}
+#: Replenishment strategies: fixed chargers in the base, mobile chargers.
+STRATEGY_STYLES = {
+    "fixed": Style(OKABE_ITO["blue"], "s", "-", "//"),
+    "mobile": Style(OKABE_ITO["vermillion"], "o", "-", ""),
+}
+#: For names no table above knows (a plugin rule), in sorted order of those names.
+_OTHER_STYLES = (Style(OKABE_ITO["sky blue"], "P", (0, (3, 1, 1, 1, 1, 1)), "++"),
+                 Style(OKABE_ITO["black"], "X", (0, (1, 2)), "oo"),
+                 Style(OKABE_ITO["yellow"], "*", (0, (8, 2)), "--"))
+#: Settings on top of matplotlib's default style. The SVG ids derive from a fixed salt instead
+#: of a random one; PDFs embed TrueType fonts (type 42), which journals accept, not type 3;
+#: anything drawn in the default colour cycle takes the palette too.
+RC = {"svg.hashsalt": "dronefleet", "pdf.fonttype": 42,
+      "axes.prop_cycle": f"cycler(color={[style.colour for style in RULE_STYLES.values()]!r})"}
+
+
+def styles(names, known):
+    """The :class:`Style` of each of ``names`` (one per distinct name, in sorted order).
+
+    A name is looked up in ``known`` by its part before any parenthesis (``threshold(80)``
+    is drawn as ``threshold``); names not there take :data:`_OTHER_STYLES` in turn.
+    """
+    others = itertools.cycle(_OTHER_STYLES)
+    return {name: known.get(str(name).partition("(")[0]) or next(others) for name in sorted(set(names))}
 
 
 def require_matplotlib():
@@ -28,18 +90,34 @@ def require_matplotlib():
     return matplotlib
 
 
+def figure_paths(path):
+    """The files a figure named ``path`` is written to: its name with each of :data:`FORMATS`."""
+    path = Path(path)
+    return [path.with_suffix(f".{suffix}") for suffix in FORMATS]
+
+
 @contextmanager
-def _figure(path, title, figsize, **subplots):
-    """A new figure and its axes (``Figure.subplots(**subplots)``), saved to ``path`` on exit."""
+def _figure(path, figsize, **subplots):
+    """A new figure and its axes (``Figure.subplots(**subplots)``), saved on exit to
+    :func:`figure_paths` of ``path`` (any suffix of ``path`` is replaced).
+
+    Each file is written to a hidden sibling and renamed into place: a reader never sees
+    half a figure.
+    """
     mpl = require_matplotlib()
-    # The default style also while saving: rcParams are read when artists are drawn.
-    with mpl.style.context("default"):
+    # The project's style also while saving: rcParams are read when artists are drawn.
+    with mpl.style.context(["default", RC]):
         fig = mpl.figure.Figure(figsize=figsize, layout="constrained")
         mpl.backends.backend_agg.FigureCanvasAgg(fig)
         axes = fig.subplots(**subplots)
         yield mpl, fig, axes
-        fig.suptitle(title)
-        fig.savefig(path, dpi=DPI, format="png", metadata={"Software": None})
+        for target, suffix in zip(figure_paths(path), FORMATS):
+            tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+            try:
+                fig.savefig(tmp, dpi=DPI, format=suffix, metadata=_NO_STAMPS[suffix])
+                os.replace(tmp, target)
+            finally:
+                tmp.unlink(missing_ok=True)
 
 
 def _dodge(k, n, width):

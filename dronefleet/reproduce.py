@@ -1,9 +1,9 @@
 """Reproduce the study's figures (EXPERIMENTS.md, Figures 16-20; REPLENISHMENT.md, Figures 9-12).
 
-``dronefleet reproduce FIGURE... [--quick] [--jobs J] [--results DIR] [--redraw] [--theta N]``, FIGURE
-one or more of fig09..fig12, fig16..fig20, or ``all``. Figures 9-12 (energy replenishment) run their grid
-``configs/sweeps/replenishment-figNN.toml`` whole (seconds) into ``runs.parquet`` (one row per
-trial) and ``bounds.parquet``: see :mod:`dronefleet.replenishment.study`. Each delivery
+``dronefleet reproduce FIGURE... [--quick] [--jobs J] [--out DIR | --update-results] [--redraw | --check]
+[--theta N]``, FIGURE one or more of fig09..fig12, fig16..fig20, or ``all``. Figures 9-12 (energy
+replenishment) run their grid ``configs/sweeps/replenishment-figNN.toml`` whole (seconds) into
+``runs.parquet`` (one row per trial) and ``bounds.parquet``: see :mod:`dronefleet.replenishment.study`. Each delivery
 figure needs one or more sweeps of ``configs/sweeps/``:
 
 ==========  ==================================================================
@@ -15,21 +15,27 @@ reservations  from the rules sweep's least_confident fleets at tau 15: without a
             with reservation bids, 20 seeds, 8 more weeks (20)
 ==========  ==================================================================
 
-Sweeps run through :mod:`dronefleet.sweep` into ``<results>/<sweep>/`` (runs already
-there are reused, so figures sharing a sweep run it once, and ``dronefleet sweep run``
-or a SLURM job array can fill it beforehand). Each figure then writes its tidy tables
-to ``<results>/<figure>/*.parquet`` and draws its PNGs from those files alone, so
-``--redraw`` redraws without simulating or reading a sweep. ``--quick`` writes under
-``<results>/quick/``. Figure 19 sets beside learning the threshold(theta) that the study's
-criterion picks (:func:`dronefleet.delivery.analysis.threshold_table`), or the one
-``--theta`` names.
+Everything is written under one results root, ``<out>``: ``--out DIR``, by default
+:data:`DEFAULT_OUT` (``dronefleet-results/`` in the working directory), never the committed
+``results/`` unless ``--update-results`` names it (:data:`COMMITTED_RESULTS`, the
+repository's ``results/``: run from the repository's root). Sweeps run through
+:mod:`dronefleet.sweep` into ``<out>/<sweep>/`` (runs already there are reused, so figures
+sharing a sweep run it once, and ``dronefleet sweep run --results <out>`` or a SLURM job
+array can fill it beforehand). Each figure then writes its tidy tables to
+``<out>/<figure>/*.parquet`` and draws its files (PNG, PDF and SVG,
+:data:`dronefleet.figstyle.FORMATS`) beside them from those tables alone, so ``--redraw``
+redraws ``<out>``'s figures without simulating or reading a sweep (``--update-results
+--redraw``: the committed ones). ``--quick`` writes under ``<out>/quick/``. Figure 19 sets
+beside learning the threshold(theta) that the study's criterion picks
+(:func:`dronefleet.delivery.analysis.threshold_table`), or the one ``--theta`` names.
 
-Every figure also writes ``<results>/<figure>/runs.parquet``: one row per run it is drawn
+Every figure also writes ``<out>/<figure>/runs.parquet``: one row per run it is drawn
 from, with its sweep, its run id (``rule=random,tau_minutes=25.0,seed=3``), its grid values
 and seed and its whole ``summary``. ``--check`` re-runs a few of those runs
 (:data:`CHECK_RUNS`) in a temporary directory, in this process, and compares every value
 of their summaries with the table: the committed numbers re-derive exactly, or the
-command lists what differs (exit 1). It writes nothing under ``<results>``.
+command lists what differs (exit 1). It only reads: the committed ``results/`` unless
+``--out`` names another root.
 """
 
 import functools
@@ -49,6 +55,10 @@ from .provenance import stamp
 from .records import write_atomic
 from .sweep import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
 
+#: Where reproduce writes unless told otherwise: beside, never over, the committed results.
+DEFAULT_OUT = Path("dronefleet-results")
+#: The committed figures and tables: only --update-results writes there, --check reads them.
+COMMITTED_RESULTS = Path("results")
 REPLENISHMENT_FIGURES = ("fig09", "fig10", "fig11", "fig12")
 DELIVERY_FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
 FIGURES = (*REPLENISHMENT_FIGURES, *DELIVERY_FIGURES)
@@ -119,8 +129,8 @@ class Study:
     def fleet_template(self):
         """The fleet files of the rules sweep's least_confident runs at tau 15, with ``{seed}``.
 
-        Relative to the working directory, like the results root (and, for the default
-        root, the very path of ``reservations.toml``, so both name the same runs).
+        Relative to the working directory, like the results root (and, for the committed
+        root ``results/``, the very path of ``reservations.toml``, so both name the same runs).
         """
         rules = self.sweep("rules")
         run = next((r for r in rules.runs if r.config.rule == "least_confident"
@@ -203,7 +213,8 @@ def _write_runs(study, figure, *selections):
 def _read(study, figure, name):
     path = study.root / figure / f"{name}.parquet"
     if not path.exists():
-        raise SweepError(f"{path} is missing: run dronefleet reproduce {figure} without --redraw first")
+        raise SweepError(f"{path} is missing: run dronefleet reproduce {figure} without --redraw first, "
+                         "or redraw where its tables are (--out DIR; the committed ones: --update-results)")
     return _read_parquet(path, figure)
 
 
@@ -217,15 +228,9 @@ def _read_parquet(path, figure):
                          f"{figure} without --check or --redraw to write it again") from None
 
 
-def _draw(draw, table, path, title):
-    """One PNG, written atomically."""
-    write_atomic(path, lambda tmp: draw(table, tmp, title))
-    return path
-
-
 # ---------------------------------------------------------------------------- the figures: tidy, then draw
 # tidy_<figure>(study) writes the figure's parquet tables from the sweeps;
-# draw_<figure>(study) draws its PNGs from those tables alone.
+# draw_<figure>(study) draws its files (PNG, PDF, SVG each) from those tables alone.
 
 
 def tidy_fig16(study):
@@ -236,20 +241,14 @@ def tidy_fig16(study):
     _write_parquet(analysis.backlog_by_arrival_week(orders, study.horizon_s("rules")), d / "backlog.parquet")
 
 
-def draw_fig16(study, label="Figure 16", figure="fig16"):
+def draw_fig16(study, figure="fig16"):
     from .delivery import figures
 
     d = study.root / figure
     outcomes, backlog = _read(study, figure, "outcomes"), _read(study, figure, "backlog")
-    runs = outcomes.groupby(["rule", "tau_minutes"]).size().max()
-    weeks = int(backlog.arrival_week.max())
-    return [
-        _draw(figures.delivered_vs_delivery_time, outcomes, d / f"{figure}a.png",
-              f"{label}a: delivered parcels vs delivery time ({runs} runs each)"),
-        _draw(figures.aborted_by_tau, outcomes, d / f"{figure}b.png", f"{label}b: aborted delivery attempts"),
-        _draw(figures.backlog_bars, backlog, d / f"{figure}c.png",
-              f"{label}c: backlog age at the end of week {weeks}, by arrival week"),
-    ]
+    return [*figures.delivered_vs_delivery_time(outcomes, d / f"{figure}a"),
+            *figures.aborted_by_tau(outcomes, d / f"{figure}b"),
+            *figures.backlog_bars(backlog, d / f"{figure}c")]
 
 
 def tidy_fig17(study):
@@ -262,8 +261,7 @@ def draw_fig17(study):
     from .delivery import figures
 
     accuracy = _read(study, "fig17", "accuracy")
-    return [_draw(figures.accuracy_over_weeks, accuracy, study.root / "fig17" / "fig17.png",
-                  f"Figure 17: decision accuracy by week, tau = {LEARNING_TAU:g} min")]
+    return figures.accuracy_over_weeks(accuracy, study.root / "fig17" / "fig17")
 
 
 def tidy_fig18(study):
@@ -278,8 +276,7 @@ def draw_fig18(study):
     from .delivery import figures
 
     grid = _read(study, "fig18", "winner_soh")
-    return [_draw(figures.winner_soh_heatmaps, grid, study.root / "fig18" / "fig18.png",
-                  f"Figure 18: mean SoH of the least_confident winner (final policies, tau = {LEARNING_TAU:g} min)")]
+    return figures.winner_soh_heatmaps(grid, study.root / "fig18" / "fig18")
 
 
 def tidy_fig19(study):
@@ -312,7 +309,7 @@ def draw_fig19(study):
         paths = [d / p.name for p in figures.write_threshold_table(table, Path(tmp) / "thresholds")]
         for path in paths:
             os.replace(Path(tmp) / path.name, path)
-    return paths + draw_fig16(study, label="Figure 19", figure="fig19")
+    return paths + draw_fig16(study, figure="fig19")
 
 
 def tidy_fig20(study):
@@ -325,10 +322,7 @@ def tidy_fig20(study):
 def draw_fig20(study):
     from .delivery import figures
 
-    pending = _read(study, "fig20", "pending")
-    weeks = int(pending.arrival_week.max())
-    return [_draw(figures.pending_bars, pending, study.root / "fig20" / "fig20.png",
-                  f"Figure 20: pending orders after {weeks} more weeks from learned fleets, by arrival week")]
+    return figures.pending_bars(_read(study, "fig20", "pending"), study.root / "fig20" / "fig20")
 
 
 TIDY = {"fig16": tidy_fig16, "fig17": tidy_fig17, "fig18": tidy_fig18, "fig19": tidy_fig19, "fig20": tidy_fig20,
@@ -353,12 +347,13 @@ def _check_theta(study, figures, redraw):
                          f"{', '.join(f'{value:g}' for value in sweep.grid['theta'])}")
 
 
-def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, log=print, theta=None):
-    """Reproduce ``figures`` (names of :data:`FIGURES`): run missing sweeps, tidy, draw.
+def reproduce(figures, out=DEFAULT_OUT, quick=False, jobs=None, redraw=False, log=print, theta=None):
+    """Reproduce ``figures`` (names of :data:`FIGURES`) under the results root ``out``: run
+    missing sweeps, tidy, draw.
 
-    With ``redraw``, only draw, from the tidy parquet tables already written. ``theta`` (%)
-    is Figure 19's threshold, one of its sweep's; None lets the study's criterion pick it.
-    Returns the paths of the figure files, by figure.
+    With ``redraw``, only draw, from the tidy parquet tables already written there. ``theta``
+    (%) is Figure 19's threshold, one of its sweep's; None lets the study's criterion pick it.
+    Returns the paths of the figure files (every format), by figure.
     """
     from .figstyle import require_matplotlib
 
@@ -366,7 +361,7 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
         require_matplotlib()  # refuse before hours of runs, not after
     except ImportError as error:
         raise SweepError(str(error)) from None
-    study = Study(results, quick, jobs, log, theta)
+    study = Study(out, quick, jobs, log, theta)
     _check_theta(study, figures, redraw)
     if not redraw:
         replenishment.run_together(study, [figure for figure in figures if figure in REPLENISHMENT_FIGURES])
@@ -379,8 +374,8 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
                 study.ensure(name)
             TIDY[figure](study)
         drawn[figure] = DRAW[figure](study)
-        log(f"  {figure}: {', '.join(str(p) for p in drawn[figure])} ({time.perf_counter() - start:.1f} s)",
-            flush=True)
+        log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
+            f"({time.perf_counter() - start:.1f} s)", flush=True)
     return drawn
 
 
@@ -389,7 +384,7 @@ def _same(a, b):
     return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
 
 
-def check(figure, results="results", quick=False, log=print):
+def check(figure, results=COMMITTED_RESULTS, quick=False, log=print):
     """Re-run :data:`CHECK_RUNS` of ``figure`` and compare them with its ``runs.parquet``.
 
     The runs execute one after the other in this process, in a temporary results root
@@ -441,21 +436,26 @@ def command(args):
     """``dronefleet reproduce``."""
     figures = FIGURES if "all" in args.figure else tuple(dict.fromkeys(args.figure))
     named = " ".join(args.figure)
+    # --check only reads, so it reads the committed results unless --out names another root.
+    root = args.out or (COMMITTED_RESULTS if args.update_results or args.check else DEFAULT_OUT)
+    if root.exists() and not root.is_dir():
+        raise SweepError(f"--out {str(root)!r} is a file: give the folder to write the results under")
     start = time.perf_counter()
     if args.check:
         if args.redraw:
             raise SweepError("--check re-runs runs and --redraw only draws: give one of them")
         if args.theta is not None:
             raise SweepError("--check re-runs runs and --theta chooses what fig19 draws: give one of them")
-        differences = [line for figure in figures for line in check(figure, args.results, args.quick)]
+        differences = [line for figure in figures for line in check(figure, root, args.quick)]
         for line in differences:
             print(f"  differs: {line}")
         print(f"reproduce {named} --check: "
               f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
               f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
-    reproduce(figures, args.results, args.quick, args.jobs, args.redraw, theta=args.theta)
-    print(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s")
+    reproduce(figures, root, args.quick, args.jobs, args.redraw, theta=args.theta)
+    print(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s, "
+          f"under {Path(root) / 'quick' if args.quick else root}")
     return 0
 
 

@@ -2,8 +2,9 @@
 """Reproduce a figure of the study: ``python experiments/reproduce.py fig09|...|fig20|all [--quick]``.
 
 ``experiments/figNN.py`` are links to this script that reproduce their figure
-(``python experiments/fig16.py --quick``). Same as ``dronefleet reproduce``; see
-``results/README.md`` for what each figure runs and shows.
+(``python experiments/fig16.py --quick``). Same as ``dronefleet reproduce``, options
+included (``--out DIR``, default ``dronefleet-results/``; ``--update-results`` for the
+committed ``results/``); see ``results/README.md`` for what each figure runs and shows.
 """
 
 import sys

@@ -5,6 +5,7 @@ Python, never with the engine's own functions.
 """
 
 import math
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -139,3 +140,22 @@ strategy = ["mobile"]
 n_chargers = [1, 2, 3]
 """,
 }
+
+
+@pytest.fixture
+def drawn_figures(monkeypatch):
+    """``keep(module)``: from then on, every figure drawn by ``module``'s functions (through its
+    ``_figure``) is appended to the list ``keep`` returns."""
+    def keep(module):
+        kept = []
+        original = module._figure
+
+        @contextmanager
+        def keeping(*args, **kwargs):
+            with original(*args, **kwargs) as (mpl, fig, axes):
+                kept.append(fig)
+                yield mpl, fig, axes
+
+        monkeypatch.setattr(module, "_figure", keeping)
+        return kept
+    return keep

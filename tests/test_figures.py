@@ -1,7 +1,9 @@
-"""Figures: a PNG per table, the same bytes for the same table, no simulator, no pyplot, no user style."""
+"""Figures: PNG, PDF and SVG per table, the same bytes for the same table, no titles, the
+shared style, no simulator, no pyplot, no user style."""
 
 import ast
 import sys
+from itertools import combinations
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +15,8 @@ from dronefleet.delivery import figures
 
 matplotlib = pytest.importorskip("matplotlib")
 
-PNG = b"\x89PNG\r\n\x1a\n"
+#: How each format's file starts.
+MAGIC = {"png": b"\x89PNG\r\n\x1a\n", "pdf": b"%PDF-", "svg": b"<?xml"}
 
 
 def outcomes():
@@ -60,7 +63,7 @@ DRAWINGS = {
 
 
 @pytest.mark.parametrize("name", DRAWINGS)
-def test_a_table_gives_a_png_of_the_same_bytes_every_time_and_the_data_shows(name, tmp_path, monkeypatch):
+def test_a_table_gives_each_format_with_the_same_bytes_every_time_and_the_data_shows(name, tmp_path, monkeypatch):
     draw, table, column = DRAWINGS[name]
     import dronefleet.delivery.simulation
 
@@ -68,21 +71,78 @@ def test_a_table_gives_a_png_of_the_same_bytes_every_time_and_the_data_shows(nam
         raise AssertionError("a figure must not simulate")
 
     monkeypatch.setattr(dronefleet.delivery.simulation, "simulate", no_simulation)
-    paths = [draw(table(), tmp_path / "first.png", f"Figure: {name}"),
-             draw(table(), tmp_path / "second.png", f"Figure: {name}")]
-    first, second = (path.read_bytes() for path in paths)
-    assert first.startswith(PNG) and len(first) > 10_000
-    assert first == second
-    assert b"matplotlib" not in first.lower()  # no Software entry (it names the version)
+    first = draw(table(), tmp_path / "first.png")
+    assert first == [tmp_path / f"first.{suffix}" for suffix in ("png", "pdf", "svg")]
+    second = draw(table(), tmp_path / "second.png")
+    for path, again in zip(first, second):
+        data = path.read_bytes()
+        assert data.startswith(MAGIC[path.suffix[1:]]) and len(data) > 10_000, path.name
+        assert data == again.read_bytes(), path.name
+        # no Software / Creator / Producer entry (they name the version), no date
+        assert b"matplotlib v" not in data.lower() and b"matplotlib version" not in data.lower(), path.name
+        assert b"CreationDate" not in data and b"<dc:date>" not in data, path.name
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(p.name for p in first + second)  # no leftovers
     changed = table()
     changed[column] = changed[column] * 1.5
-    assert draw(changed, tmp_path / "changed.png", f"Figure: {name}").read_bytes() != first
+    assert draw(changed, tmp_path / "changed")[0].read_bytes() != first[0].read_bytes()
+
+
+def test_no_figure_has_a_title(tmp_path, drawn_figures):
+    kept = drawn_figures(figures)
+    for name, (draw, table, _) in DRAWINGS.items():
+        draw(table(), tmp_path / name)
+    assert len(kept) == len(DRAWINGS)
+    for fig in kept:
+        assert fig._suptitle is None or fig._suptitle.get_text() == ""
+        assert all(ax.get_title(loc) == "" for ax in fig.axes for loc in ("left", "center", "right"))
+
+
+def test_each_rule_keeps_the_studys_colour_and_its_own_marker_and_line_style(tmp_path, drawn_figures):
+    green, pink, orange = "#009E73", "#CC79A7", "#E69F00"  # least_confident, most_confident, random
+    table = pd.concat([accuracy(), accuracy().query("rule == 'random'").assign(rule="most_confident")])
+    kept = drawn_figures(figures)
+    figures.accuracy_over_weeks(table, tmp_path / "fig")
+    lines = {line.get_label().split()[0]: line for line in kept[0].axes[0].lines}
+    assert {rule: line.get_color() for rule, line in lines.items()} == {
+        "least_confident": green, "most_confident": pink, "random": orange}
+    assert len({line.get_marker() for line in lines.values()}) == 3  # apart in greyscale too
+    assert len({line.get_linestyle() for line in lines.values()}) == 3
+
+
+def test_styles_of_baselines_and_unknown_rules_are_all_different():
+    chosen = figstyle.styles(["threshold(80)", "least_confident", "reservation", "mine", "yours"],
+                             figstyle.RULE_STYLES)
+    assert chosen["threshold(80)"] == figstyle.RULE_STYLES["threshold"]
+    assert len(set(chosen.values())) == 5 and len({style.colour for style in chosen.values()}) == 5
+    assert figstyle.styles(["fixed", "mobile"], figstyle.STRATEGY_STYLES)["fixed"].colour != \
+        figstyle.styles(["fixed", "mobile"], figstyle.STRATEGY_STYLES)["mobile"].colour
+
+
+def test_tau_labels_of_coinciding_boxes_are_written_once_and_none_overlap(tmp_path, drawn_figures):
+    # At tau 30 and 35 both rules have the same runs (their boxes coincide, as at light load
+    # in Fig. 16a); at tau 15 they are far apart.
+    frame = outcomes()
+    same = frame["tau_minutes"] == 30.0
+    frame.loc[same & (frame["rule"] == "random"), ["delivered", "median_delivery_time_s"]] = \
+        frame.loc[same & (frame["rule"] == "least_confident"), ["delivered", "median_delivery_time_s"]].to_numpy()
+    frame.loc[(frame["rule"] == "random") & ~same, "median_delivery_time_s"] += 50_000.0
+    kept = drawn_figures(figures)
+    figures.delivered_vs_delivery_time(frame, tmp_path / "fig")
+    fig = kept[0]
+    labels = fig.axes[0].texts
+    assert sorted(text.get_text() for text in labels) == ["15", "15", "30"]
+    (shared,) = [text for text in labels if text.get_text() == "30"]
+    assert matplotlib.colors.to_hex(shared.get_color()) == "#000000"
+    renderer = fig.canvas.get_renderer()
+    for a, b in combinations(labels, 2):
+        assert not a.get_window_extent(renderer).overlaps(b.get_window_extent(renderer))
 
 
 def test_the_users_matplotlib_style_changes_nothing(tmp_path):
-    before = figures.aborted_by_tau(outcomes(), tmp_path / "before.png", "Figure").read_bytes()
-    with matplotlib.rc_context({"lines.linewidth": 7.0, "axes.facecolor": "red", "font.size": 20}):
-        styled = figures.aborted_by_tau(outcomes(), tmp_path / "styled.png", "Figure").read_bytes()
+    before = [path.read_bytes() for path in figures.aborted_by_tau(outcomes(), tmp_path / "before")]
+    with matplotlib.rc_context({"lines.linewidth": 7.0, "axes.facecolor": "red", "font.size": 20,
+                                "svg.hashsalt": "mine"}):
+        styled = [path.read_bytes() for path in figures.aborted_by_tau(outcomes(), tmp_path / "styled")]
         assert matplotlib.rcParams["lines.linewidth"] == 7.0  # and the user's settings stay
     assert styled == before
 
@@ -98,8 +158,8 @@ def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp
                         for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
 
     assert imported(figures) == {"pathlib", "numpy", "pandas", "..figstyle"}
-    assert imported(figstyle) == {"contextlib", "matplotlib"}
-    figures.accuracy_over_weeks(accuracy(), tmp_path / "fig.png", "Figure")
+    assert imported(figstyle) == {"contextlib", "itertools", "os", "pathlib", "typing", "matplotlib"}
+    figures.accuracy_over_weeks(accuracy(), tmp_path / "fig")
     # matplotlib itself may import pyplot (to resolve its default backend), but no figure is left there.
     if "matplotlib.pyplot" in sys.modules:
         assert sys.modules["matplotlib.pyplot"].get_fignums() == []
@@ -108,8 +168,8 @@ def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp
 def test_without_matplotlib_the_error_says_how_to_install_it(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     with pytest.raises(ImportError, match=r"pip install 'dronefleet\[plots\]'"):
-        figures.aborted_by_tau(outcomes(), tmp_path / "fig.png", "Figure")
-    assert not (tmp_path / "fig.png").exists()
+        figures.aborted_by_tau(outcomes(), tmp_path / "fig")
+    assert not any(tmp_path.iterdir())
 
 
 def test_threshold_table_files(tmp_path):

@@ -1,15 +1,14 @@
 """Figures 9-12 of the replenishment study: the grids of REPLENISHMENT.md section 10 (sweep files),
-``dronefleet reproduce fig09..fig12`` (tables, PNGs, --redraw, --check) and the bounds they draw."""
+``dronefleet reproduce fig09..fig12`` (tables, figure files, --redraw, --check) and the bounds they draw."""
 
 import importlib
 import shutil
-from contextlib import contextmanager
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from dronefleet import cli, reproduce, sweep
+from dronefleet import cli, figstyle, reproduce, sweep
 from dronefleet.replenishment import Params, bounds, experiments, study
 from dronefleet.replenishment import figures as rfigures
 
@@ -85,7 +84,7 @@ def tiny(tmp_path_factory):
 
 
 @pytest.mark.parametrize("figure", FIGURES)
-def test_quick_mode_writes_every_trial_and_bound_and_the_png(tiny, figure):
+def test_quick_mode_writes_every_trial_and_bound_and_the_figure(tiny, figure):
     results, drawn = tiny
     root = results / "quick" / figure
     configs = grid(figure)
@@ -95,8 +94,8 @@ def test_quick_mode_writes_every_trial_and_bound_and_the_png(tiny, figure):
     assert (runs.seed == 876 * runs.trial).all() and (runs.ticks == TINY_TICKS).all()
     assert set(experiments.METRIC_COLUMNS) <= set(runs.columns) and runs.work.gt(0).any()
     assert len(pd.read_parquet(root / "bounds.parquet")) == len(configs)
-    png = root / f"{figure}.png"
-    assert drawn[figure] == [png] and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert drawn[figure] == [root / f"{figure}.{suffix}" for suffix in ("png", "pdf", "svg")]
+    assert [path.read_bytes()[:4] for path in drawn[figure]] == [b"\x89PNG", b"%PDF", b"<?xm"]
 
 
 def test_figures_run_together_equal_each_run_alone_and_share_configurations(tiny, tmp_path, monkeypatch):
@@ -149,13 +148,14 @@ def test_redraw_needs_only_the_tables(tiny, tmp_path, monkeypatch):
 
     monkeypatch.setattr(simulate_module, "simulate", forbidden)
     monkeypatch.setattr(experiments, "run_configs", forbidden)
-    assert cli.main(["reproduce", *FIGURES, "--quick", "--redraw", "--results", str(tmp_path)]) == 0
+    assert cli.main(["reproduce", *FIGURES, "--quick", "--redraw", "--out", str(tmp_path)]) == 0
     for figure in FIGURES:
-        assert (copy / figure / f"{figure}.png").read_bytes() == drawn[figure][0].read_bytes()
+        for path in drawn[figure]:  # every format, the same bytes
+            assert (copy / figure / path.name).read_bytes() == path.read_bytes()
 
 
 def test_redraw_without_tables_says_what_to_run(tmp_path, capsys):
-    assert cli.main(["reproduce", "fig10", "--redraw", "--results", str(tmp_path)]) == 2
+    assert cli.main(["reproduce", "fig10", "--redraw", "--out", str(tmp_path)]) == 2
     assert "run dronefleet reproduce fig10 without --redraw first" in capsys.readouterr().err
 
 
@@ -177,38 +177,22 @@ def test_check_lists_a_tampered_value_and_exits_1(tiny, tmp_path, capsys):
     runs.loc[changed, "efficiency"] = np.nextafter(runs.loc[changed, "efficiency"], 2.0)  # one ulp
     (tmp_path / "quick" / "fig11").mkdir(parents=True)
     runs.to_parquet(tmp_path / "quick" / "fig11" / "runs.parquet")
-    assert cli.main(["reproduce", "fig11", "--quick", "--check", "--results", str(tmp_path)]) == 1
+    assert cli.main(["reproduce", "fig11", "--quick", "--check", "--out", str(tmp_path)]) == 1
     out = capsys.readouterr().out
     assert "differs: fig11 strategy=mobile,charge_rate=0.1 trial 2: efficiency committed" in out
     assert "values that differ: 1" in out
 
 
-@contextmanager
-def captured_axes(monkeypatch):
-    """Every figure drawn inside keeps its axes in the yielded list."""
-    kept = []
-    original = rfigures._figure
-
-    @contextmanager
-    def keeping(*args, **kwargs):
-        with original(*args, **kwargs) as (mpl, fig, axes):
-            kept.append(axes)
-            yield mpl, fig, axes
-
-    monkeypatch.setattr(rfigures, "_figure", keeping)
-    yield kept
-
-
 @pytest.mark.parametrize("figure", ("fig10", "fig11", "fig12"))
-def test_the_bound_lines_are_bounds_at_each_grid_point(tiny, figure, tmp_path, monkeypatch):
+def test_the_bound_lines_are_bounds_at_each_grid_point(tiny, figure, tmp_path, drawn_figures):
     results, _ = tiny
     runs = pd.read_parquet(results / "quick" / figure / "runs.parquet")
     table = pd.read_parquet(results / "quick" / figure / "bounds.parquet")
     curve = study.CURVES[figure]
     x = curve["x"]
-    with captured_axes(monkeypatch) as kept:
-        rfigures.work_and_efficiency(runs, table, tmp_path / "f.png", "t", **curve)
-    work_ax, efficiency_ax = kept[0]
+    kept = drawn_figures(rfigures)
+    rfigures.work_and_efficiency(runs, table, tmp_path / "f", **curve)
+    work_ax, efficiency_ax = kept[0].axes
     configs = grid(figure, {"ticks": TINY_TICKS})
     for strategy in ("fixed", "mobile"):
         mine = sorted((p for p in configs if p.strategy == strategy), key=lambda p: getattr(p, x))
@@ -226,3 +210,23 @@ def test_the_bound_lines_are_bounds_at_each_grid_point(tiny, figure, tmp_path, m
         (means,) = [line for line in efficiency_ax.lines if line.get_label() == "mobile chargers: trials and mean"]
         expected = runs[runs.strategy == "mobile"].groupby("transfer_loss").efficiency_with_loss.mean()
         assert list(means.get_ydata()) == expected.tolist()
+
+
+def test_the_figures_have_no_titles_and_each_strategy_its_own_colour_and_marker(tiny, tmp_path, drawn_figures):
+    results, _ = tiny
+    root = results / "quick"
+    kept = drawn_figures(rfigures)
+    rfigures.heatmaps(pd.read_parquet(root / "fig09" / "runs.parquet"), tmp_path / "fig09")
+    rfigures.work_and_efficiency(pd.read_parquet(root / "fig10" / "runs.parquet"),
+                                 pd.read_parquet(root / "fig10" / "bounds.parquet"), tmp_path / "fig10",
+                                 **study.CURVES["fig10"])
+    assert len(kept) == 2
+    for fig in kept:
+        assert fig._suptitle is None
+        assert all(ax.get_title(loc) == "" for ax in fig.axes for loc in ("left", "center", "right"))
+    work_ax = kept[1].axes[0]
+    means = {line.get_label(): line for line in work_ax.lines if line.get_label().endswith("trials and mean")}
+    fixed, mobile = means["fixed chargers: trials and mean"], means["mobile chargers: trials and mean"]
+    assert (fixed.get_color(), mobile.get_color()) == (figstyle.STRATEGY_STYLES["fixed"].colour,
+                                                       figstyle.STRATEGY_STYLES["mobile"].colour)
+    assert fixed.get_marker() != mobile.get_marker()  # apart in greyscale too

@@ -1,4 +1,5 @@
-"""``dronefleet reproduce``: every figure in quick mode, its tidy tables, and redrawing without simulating."""
+"""``dronefleet reproduce``: every figure in quick mode, its tidy tables, redrawing without simulating,
+and where it writes (``--out``, by default not the committed results; ``--update-results``)."""
 
 import shutil
 import subprocess
@@ -15,7 +16,8 @@ from dronefleet.delivery.fleet import seeded_path
 pytest.importorskip("matplotlib")
 
 ROOT = Path(__file__).resolve().parent.parent
-PNGS = {"fig16": ["fig16a", "fig16b", "fig16c"], "fig17": ["fig17"], "fig18": ["fig18"],
+FORMATS = ("png", "pdf", "svg")
+DRAWINGS = {"fig16": ["fig16a", "fig16b", "fig16c"], "fig17": ["fig17"], "fig18": ["fig18"],
         "fig19": ["fig19a", "fig19b", "fig19c"], "fig20": ["fig20"],
         **{figure: [figure] for figure in reproduce.REPLENISHMENT_FIGURES}}
 TABLES = {"fig16": ["outcomes", "backlog"], "fig17": ["accuracy"], "fig18": ["winner_soh"],
@@ -34,15 +36,16 @@ def quick(tmp_path_factory):
 
 
 @pytest.mark.parametrize("figure", reproduce.FIGURES)
-def test_quick_mode_writes_non_empty_tables_and_figures(quick, figure):
+def test_quick_mode_writes_non_empty_tables_and_figures_in_every_format(quick, figure):
     root, drawn, _ = quick
     for name in TABLES[figure]:
         table = pd.read_parquet(root / figure / f"{name}.parquet")
         assert len(table) > 0, name
-    for name in PNGS[figure]:
-        path = root / figure / f"{name}.png"
-        assert path in drawn[figure]
-        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and path.stat().st_size > 10_000
+    for name in DRAWINGS[figure]:
+        for suffix in FORMATS:
+            path = root / figure / f"{name}.{suffix}"
+            assert path in drawn[figure]
+            assert path.stat().st_size > 10_000
 
 
 def test_the_tidy_tables_hold_every_run_and_week(quick):
@@ -143,12 +146,12 @@ def test_redrawing_reads_only_the_parquet_tables(quick, monkeypatch):
     for paths in drawn.values():
         for path in paths:
             path.unlink()
-    assert cli.main(["reproduce", "all", "--quick", "--redraw", "--results", str(root.parent)]) == 0
+    assert cli.main(["reproduce", "all", "--quick", "--redraw", "--out", str(root.parent)]) == 0
     assert {path: path.read_bytes() for path in before} == before  # the same bytes again
 
 
 def test_redraw_without_tables_says_what_to_run(tmp_path, capsys):
-    assert cli.main(["reproduce", "fig17", "--redraw", "--results", str(tmp_path)]) == 2
+    assert cli.main(["reproduce", "fig17", "--redraw", "--out", str(tmp_path)]) == 2
     assert "run dronefleet reproduce fig17 without --redraw first" in capsys.readouterr().err
 
 
@@ -181,7 +184,7 @@ def test_without_matplotlib_nothing_runs(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setattr(figstyle, "require_matplotlib", missing)  # looked up at each call
     monkeypatch.setattr(reproduce, "run_sweep", forbidden)
-    assert cli.main(["reproduce", "fig16", "--quick", "--results", str(tmp_path)]) == 2
+    assert cli.main(["reproduce", "fig16", "--quick", "--out", str(tmp_path)]) == 2
     assert "pip install 'dronefleet[plots]'" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
 
@@ -196,3 +199,57 @@ def test_each_figure_lists_its_runs_and_they_re_derive(quick, figure, runs):
     lines = []
     assert reproduce.check(figure, root.parent, quick=True, log=lambda *a, **k: lines.append(" ".join(map(str, a)))) == []
     assert any(line.endswith("identical") for line in lines)  # seeds 0-1 of CHECK_RUNS, the others skipped
+
+
+def _copy_tables(source, root, figure):
+    (root / figure).mkdir(parents=True)
+    for name in TABLES[figure]:
+        shutil.copy(source / figure / f"{name}.parquet", root / figure)
+
+
+def test_reproduce_writes_to_its_own_folder_by_default_never_to_the_committed_results(quick, tmp_path, monkeypatch):
+    root, drawn, _ = quick
+    monkeypatch.chdir(tmp_path)
+    _copy_tables(root, tmp_path / "dronefleet-results" / "quick", "fig20")
+    _copy_tables(root, tmp_path / "results" / "quick", "fig20")  # as if committed
+    committed = {path: path.read_bytes() for path in (tmp_path / "results").rglob("*") if path.is_file()}
+    assert cli.main(["reproduce", "fig20", "--quick", "--redraw"]) == 0
+    assert sorted(path.name for path in (tmp_path / "dronefleet-results" / "quick" / "fig20").glob("fig20.*")) == \
+        [f"fig20.{suffix}" for suffix in sorted(FORMATS)]
+    assert {path: path.read_bytes() for path in (tmp_path / "results").rglob("*") if path.is_file()} == committed
+
+
+def test_update_results_refreshes_the_committed_figures(quick, tmp_path, monkeypatch):
+    root, drawn, _ = quick
+    monkeypatch.chdir(tmp_path)
+    _copy_tables(root, tmp_path / "results" / "quick", "fig17")
+    assert cli.main(["reproduce", "fig17", "--quick", "--redraw", "--update-results"]) == 0
+    for suffix in FORMATS:
+        assert (tmp_path / "results" / "quick" / "fig17" / f"fig17.{suffix}").read_bytes() == \
+            (root / "fig17" / f"fig17.{suffix}").read_bytes()
+    assert not (tmp_path / "dronefleet-results").exists()
+
+
+def test_check_reads_the_committed_results_unless_out_names_another_root(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["reproduce", "fig17", "--check"]) == 2
+    assert f"{Path('results') / 'fig17' / 'runs.parquet'} is missing" in capsys.readouterr().err
+    assert cli.main(["reproduce", "fig17", "--check", "--out", "elsewhere"]) == 2
+    assert f"{Path('elsewhere') / 'fig17' / 'runs.parquet'} is missing" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+
+
+def test_out_and_update_results_exclude_each_other(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit:
+        cli.main(["reproduce", "fig17", "--out", str(tmp_path), "--update-results"])
+    assert exit.value.code == 2
+    assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_an_out_that_is_a_file_is_refused_in_one_line(tmp_path, capsys):
+    taken = tmp_path / "notes.txt"
+    taken.write_text("mine\n")
+    assert cli.main(["reproduce", "fig10", "--quick", "--out", str(taken)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"dronefleet: error: --out {str(taken)!r} is a file: give the folder to write the results under\n"
+    assert taken.read_text() == "mine\n"

@@ -47,7 +47,7 @@ def test_a_number_that_does_not_re_derive_is_listed_and_the_check_exits_1(tmp_pa
     runs.loc[changed, "delivered"] += 1
     (tmp_path / "fig16").mkdir()
     runs.to_parquet(tmp_path / "fig16" / "runs.parquet")
-    assert cli.main(["reproduce", "fig16", "--check", "--results", str(tmp_path)]) == 1
+    assert cli.main(["reproduce", "fig16", "--check", "--out", str(tmp_path)]) == 1
     out = capsys.readouterr().out
     committed = int(runs.loc[changed, "delivered"].iloc[0])
     assert (f"differs: fig16 rules rule=random,tau_minutes=25.0,seed=3: delivered committed {committed}, "
@@ -57,7 +57,7 @@ def test_a_number_that_does_not_re_derive_is_listed_and_the_check_exits_1(tmp_pa
 
 
 def test_a_figure_without_its_runs_table_is_refused(tmp_path, capsys):
-    assert cli.main(["reproduce", "fig17", "--check", "--results", str(tmp_path)]) == 2
+    assert cli.main(["reproduce", "fig17", "--check", "--out", str(tmp_path)]) == 2
     assert "fig17/runs.parquet is missing: run dronefleet reproduce fig17 first" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())
 
@@ -68,7 +68,7 @@ def test_a_runs_table_that_is_not_parquet_is_refused_in_one_line(tmp_path, capsy
     path = tmp_path / figure / "runs.parquet"
     path.parent.mkdir()
     path.write_bytes(content)
-    assert cli.main(["reproduce", figure, "--check", "--results", str(tmp_path)]) == 2
+    assert cli.main(["reproduce", figure, "--check", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.splitlines()) == 1, err
     assert f"{path} cannot be read as a parquet table (" in err and f"run dronefleet reproduce {figure} " in err

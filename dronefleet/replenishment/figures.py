@@ -1,22 +1,22 @@
 """The replenishment study's figures (REPLENISHMENT.md section 10, Figs 9-12) from tidy tables alone.
 
 Each function reads the tables :mod:`dronefleet.replenishment.experiments` writes (one
-row per trial; one row of bounds per configuration) and draws one PNG with the style of
-:mod:`dronefleet.figstyle` (matplotlib's default style, Agg canvas, no "Software" entry:
-the same tables give the same bytes). Nothing here imports the simulator.
+row per trial; one row of bounds per configuration) and draws one figure, as PNG, PDF and
+SVG, with the style of :mod:`dronefleet.figstyle` (Agg canvas, no titles, no dates or
+versions in the files: the same tables give the same bytes). Nothing here imports the
+simulator.
 
-Colours: the fixed strategy C0, the mobile chargers C1, in every figure.
+Each strategy has its colour and marker of :data:`dronefleet.figstyle.STRATEGY_STYLES` in
+every figure: means are solid lines with filled markers, bounds dashed with hollow ones.
 """
 
-from pathlib import Path
 
 import numpy as np
 
-from ..figstyle import _dodge, _figure
+from ..figstyle import STRATEGY_STYLES, _dodge, _figure, figure_paths, styles
 
-COLOURS = {"fixed": "C0", "mobile": "C1"}
 LABELS = {"fixed": "fixed chargers", "mobile": "mobile chargers"}
-#: Fig 9's panels: (per-trial column, panel title, number format).
+#: Fig 9's panels: (per-trial column, what it is (the colour bar's label), number format).
 HEATMAP_PANELS = (("work", "work W (points)", "{:.0f}"),
                   ("energy", "total energy consumed", "{:.0f}"),
                   ("efficiency", "efficiency (work energy / total)", "{:.3f}"),
@@ -25,28 +25,29 @@ HEATMAP_PANELS = (("work", "work W (points)", "{:.0f}"),
 _SPREAD = 0.012
 
 
-def heatmaps(runs, path, title):
+def heatmaps(runs, path):
     """Fig 9: mean W, total energy, efficiency and depleted workers over (n_m, phi), four panels.
 
     Rows phi, columns n_m; the fixed strategy (no mobile chargers) in the "0 chargers / 0x"
     cell, cells without a configuration blank. Each cell is written with its mean; each
-    panel has its own colour scale.
+    panel has its own colour scale, whose label says what the panel shows.
 
     Parameters
     ----------
     runs : pandas.DataFrame
         Per-trial rows: ``strategy, n_chargers, charger_capacity_factor`` and the panel columns.
     path : str or Path
-    title : str
+        Figure file name (its suffix is replaced by each format's).
 
     Returns
     -------
-    Path
+    list of Path
+        The figure's files, one per format.
     """
     cells = runs.assign(phi=np.where(runs["strategy"] == "fixed", 0.0, runs["charger_capacity_factor"]))
     means = cells.groupby(["phi", "n_chargers"])[[c for c, _, _ in HEATMAP_PANELS]].mean()
     trials = int(runs.groupby(["strategy", "n_chargers", "charger_capacity_factor"]).size().max())
-    with _figure(path, title, (12.0, 9.0), nrows=2, ncols=2) as (mpl, fig, axes):
+    with _figure(path, (12.0, 9.0), nrows=2, ncols=2) as (mpl, fig, axes):
         for ax, (column, label, fmt) in zip(axes.flat, HEATMAP_PANELS):
             grid = means[column].unstack("n_chargers")
             values = grid.to_numpy()
@@ -61,9 +62,8 @@ def heatmaps(runs, path, title):
             ax.set_yticks(range(len(grid.index)), [f"{phi:g}x" for phi in grid.index])
             ax.set_xlabel("mobile chargers n_m (0: fixed chargers)")
             ax.set_ylabel("charger capacity phi (x c_w)")
-            ax.set_title(f"{label}, mean of {trials} trials", fontsize=10)
-            fig.colorbar(image, ax=ax, fraction=0.05, pad=0.02)
-    return Path(path)
+            fig.colorbar(image, ax=ax, fraction=0.05, pad=0.02, label=f"{label}, mean of {trials} trials")
+    return figure_paths(path)
 
 
 def _spread(x, k, n, log_x, span):
@@ -72,7 +72,7 @@ def _spread(x, k, n, log_x, span):
     return x * 10.0 ** offset if log_x else x + offset
 
 
-def work_and_efficiency(runs, bounds, path, title, x, xlabel, efficiency="efficiency", log_x=False,
+def work_and_efficiency(runs, bounds, path, x, xlabel, efficiency="efficiency", log_x=False,
                         fixed_line=False):
     """Figs 10-12: work and efficiency against the varied parameter ``x``, both strategies.
 
@@ -89,7 +89,7 @@ def work_and_efficiency(runs, bounds, path, title, x, xlabel, efficiency="effici
     bounds : pandas.DataFrame
         One row per configuration: ``strategy``, ``x``, ``bound_work``, ``bound_efficiency``.
     path : str or Path
-    title : str
+        Figure file name (its suffix is replaced by each format's).
     x : str
         The varied parameter's column.
     xlabel : str
@@ -100,38 +100,38 @@ def work_and_efficiency(runs, bounds, path, title, x, xlabel, efficiency="effici
 
     Returns
     -------
-    Path
+    list of Path
     """
     panels = (("work", "bound_work", "work W (points)"),
               (efficiency, "bound_efficiency", "efficiency" if efficiency == "efficiency"
                else "efficiency: work energy / (total + lost)"))
     values = np.sort(runs.loc[runs["strategy"] != "fixed" if fixed_line else slice(None), x].unique())
     span = np.log10(values[-1] / values[0]) if log_x else values[-1] - values[0]
-    strategies = sorted(runs["strategy"].unique())
+    strategy_styles = styles(runs["strategy"], STRATEGY_STYLES)
     trials = int(runs.groupby(["strategy", x]).size().max())
-    with _figure(path, title, (11.0, 4.6), ncols=2) as (mpl, fig, axes):
+    with _figure(path, (11.0, 4.6), ncols=2) as (mpl, fig, axes):
         for ax, (column, bound, label) in zip(axes, panels):
-            for s, strategy in enumerate(strategies):
-                colour = COLOURS.get(strategy, f"C{s + 2}")
+            for s, (strategy, style) in enumerate(strategy_styles.items()):
+                colour = style.colour
                 mine = runs[runs["strategy"] == strategy]
                 limit = bounds[bounds["strategy"] == strategy].sort_values(x)
                 if fixed_line and strategy == "fixed":
-                    ax.axhline(mine[column].mean(), color=colour, lw=1.5,
+                    ax.axhline(mine[column].mean(), color=colour, lw=1.5, ls=style.linestyle,
                                label=f"{LABELS.get(strategy, strategy)}: mean")
                     ax.axhline(limit[bound].iloc[0], color=colour, lw=1.2, ls="--",
                                label=f"{LABELS.get(strategy, strategy)}: bound")
                     continue
-                dodge = _dodge(s, len(strategies), 1.5 * _SPREAD)
+                dodge = _dodge(s, len(strategy_styles), 1.5 * _SPREAD)
                 shift = (lambda v: v * 10.0 ** (dodge * span)) if log_x else (lambda v: v + dodge * span)
                 for value, group in mine.groupby(x):
                     n = len(group)
                     xs = [_spread(shift(value), k, n, log_x, span) for k in range(n)]
-                    ax.plot(xs, group[column], ".", color=colour, ms=2.5, alpha=0.35)
+                    ax.plot(xs, group[column], style.marker, color=colour, ms=2, alpha=0.35, mew=0)
                 means = mine.groupby(x)[column].mean()
-                ax.plot([shift(v) for v in means.index], means.to_numpy(), "-D", color=colour, ms=5, lw=1,
-                        label=f"{LABELS.get(strategy, strategy)}: trials and mean")
-                ax.plot(limit[x], limit[bound], "--", color=colour, lw=1.2,
-                        label=f"{LABELS.get(strategy, strategy)}: bound")
+                ax.plot([shift(v) for v in means.index], means.to_numpy(), marker=style.marker, ls=style.linestyle,
+                        color=colour, ms=5, lw=1, label=f"{LABELS.get(strategy, strategy)}: trials and mean")
+                ax.plot(limit[x], limit[bound], marker=style.marker, ls="--", color=colour, lw=1.2, ms=5,
+                        markerfacecolor="none", label=f"{LABELS.get(strategy, strategy)}: bound")
             if log_x:
                 ax.set_xscale("log")
                 ax.set_xticks(values, [f"{v:g}" for v in values])
@@ -144,4 +144,4 @@ def work_and_efficiency(runs, bounds, path, title, x, xlabel, efficiency="effici
             ax.set_ylabel(label)
             ax.grid(alpha=0.3)
         axes[0].legend(fontsize=8, title=f"{trials} trials per point", title_fontsize=8)
-    return Path(path)
+    return figure_paths(path)

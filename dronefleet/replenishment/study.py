@@ -1,11 +1,11 @@
-"""``dronefleet reproduce fig09..fig12``: the replenishment figures' tables, PNGs and check.
+"""``dronefleet reproduce fig09..fig12``: the replenishment figures' tables, drawings and check.
 
 Called by :mod:`dronefleet.reproduce` for the figures of :data:`experiments.FIGURES`. Each
 figure runs its whole grid (its sweep file, read by :func:`dronefleet.sweep.load_sweep`;
 seconds, so nothing is reused)
-and writes under ``<results>/<figure>/``: ``runs.parquet`` (one row per trial: configuration,
+and writes under ``<out>/<figure>/``: ``runs.parquet`` (one row per trial: configuration,
 trial, seed, metrics) and ``bounds.parquet`` (one row per configuration), then draws its
-PNG from those two files alone. ``--quick``: :data:`QUICK_TRIALS` trials of
+figure (PNG, PDF, SVG) from those two files alone. ``--quick``: :data:`QUICK_TRIALS` trials of
 :data:`QUICK_TICKS` ticks.
 """
 
@@ -39,14 +39,6 @@ CURVES = {
     "fig12": dict(x="transfer_loss", xlabel="transfer loss lambda (fraction of what the charger gives)",
                   efficiency="efficiency_with_loss", fixed_line=True),
 }
-TITLES = {
-    "fig09": "Figure 9: mobile chargers n_m x capacity phi (fixed chargers in the 0 / 0x cell)",
-    "fig10": "Figure 10: work and efficiency vs work ratio r, fixed vs MC(6, 2)",
-    "fig11": "Figure 11: work and efficiency vs charge rate k, fixed vs MC(6, 2)",
-    "fig12": "Figure 12: work and efficiency vs transfer loss, MC(6, 2); fixed chargers as lines",
-}
-
-
 def grid(figure, quick=False):
     """The figure's sweep (``configs/sweeps/replenishment-<figure>.toml``), shortened with ``quick``."""
     changes = {"ticks": QUICK_TICKS, "trials": QUICK_TRIALS} if quick else None
@@ -91,20 +83,15 @@ def tidy(study, figure):
 
 
 def draw(study, figure):
-    """The figure's PNG from its tables alone."""
-    from ..reproduce import _draw, _read
+    """The figure's files (PNG, PDF, SVG) from its tables alone."""
+    from ..reproduce import _read
     from . import figures
 
     runs = _read(study, figure, "runs")
-    ticks = int(runs["ticks"].max())
-    title = f"{TITLES[figure]}, {ticks} ticks"
-    path = study.root / figure / f"{figure}.png"
+    path = study.root / figure / figure
     if figure == "fig09":
-        return [_draw(figures.heatmaps, runs, path, title)]
-    bounds = _read(study, figure, "bounds")
-    curve = CURVES[figure]
-    return [_draw(lambda table, tmp, t: figures.work_and_efficiency(table, bounds, tmp, t, **curve),
-                  runs, path, title)]
+        return figures.heatmaps(runs, path)
+    return figures.work_and_efficiency(runs, _read(study, figure, "bounds"), path, **CURVES[figure])
 
 
 def _same(a, b):

@@ -127,7 +127,7 @@ def test_a_theta_that_cannot_apply_is_refused_in_one_line_before_any_run(tmp_pat
         raise AssertionError("no run may start with a --theta that cannot apply")
 
     monkeypatch.setattr(reproduce, "run_sweep", forbidden)
-    assert cli.main(["reproduce", *arguments, "--quick", "--results", str(tmp_path)]) == 2
+    assert cli.main(["reproduce", *arguments, "--quick", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.splitlines()) == 1
     assert not any(tmp_path.iterdir())

@@ -41,6 +41,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .config import shipped_config
 from .delivery import analysis
 from .replenishment import study as replenishment
 from .provenance import stamp
@@ -78,15 +79,6 @@ CHECK_RUNS = {
 }
 
 
-def sweeps_dir():
-    """``configs/sweeps`` of the source tree this package runs from."""
-    path = Path(__file__).resolve().parent.parent / "configs" / "sweeps"
-    if not path.is_dir():
-        raise SweepError(f"reproduce needs the sweep files of the source tree ({path} is missing): "
-                         "run it from a clone of the repository (pip install -e .)")
-    return path
-
-
 class Study:
     """The study's sweeps under one results root: loaded (validated) once, run on demand."""
 
@@ -106,7 +98,7 @@ class Study:
             changes = dict(QUICK_CHANGES) if self.quick else {}
             if name == "reservations":
                 changes["fleet_file"] = str(self.fleet_template())
-            self._sweeps[name] = load_sweep(sweeps_dir() / f"{name}.toml", changes=changes,
+            self._sweeps[name] = load_sweep(shipped_config("sweeps", f"{name}.toml"), changes=changes,
                                             seeds=QUICK_SEEDS if self.quick else None)
         return self._sweeps[name]
 

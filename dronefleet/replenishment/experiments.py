@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..config import shipped_config
 from ..sweep import SweepError
 from .bounds import BoundUndefinedError, bounds
 from .params import Params
@@ -39,12 +40,8 @@ METRIC_COLUMNS = ("work", "energy", "work_energy", "efficiency", "efficiency_wit
 
 
 def grid_path(figure: str) -> Path:
-    """``configs/sweeps/replenishment-<figure>.toml`` of the source tree this package runs from."""
-    path = Path(__file__).resolve().parents[2] / "configs" / "sweeps" / f"replenishment-{figure}.toml"
-    if not path.is_file():
-        raise SweepError(f"the grid of {figure} needs {path}, which is missing: run from a clone of the "
-                         "repository (pip install -e .)")
-    return path
+    """``configs/sweeps/replenishment-<figure>.toml``, shipped with the package."""
+    return shipped_config("sweeps", f"replenishment-{figure}.toml")
 
 
 def config_row(params: Params) -> dict:

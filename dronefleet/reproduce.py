@@ -31,6 +31,7 @@ command lists what differs (exit 1). It writes nothing under ``<results>``.
 """
 
 import functools
+import logging
 import os
 import sys
 import tempfile
@@ -47,6 +48,8 @@ from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
 from .sweep import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
+
+log = logging.getLogger("dronefleet.reproduce")  # not __name__: it also runs as __main__
 
 REPLENISHMENT_FIGURES = ("fig09", "fig10", "fig11", "fig12")
 DELIVERY_FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
@@ -82,7 +85,7 @@ CHECK_RUNS = {
 class Study:
     """The study's sweeps under one results root: loaded (validated) once, run on demand."""
 
-    def __init__(self, results, quick=False, jobs=None, log=print):
+    def __init__(self, results, quick=False, jobs=None, log=log.info):
         self.root = Path(results) / "quick" if quick else Path(results)
         self.quick = quick
         self.jobs = jobs or available_cpus()
@@ -98,8 +101,9 @@ class Study:
             changes = dict(QUICK_CHANGES) if self.quick else {}
             if name == "reservations":
                 changes["fleet_file"] = str(self.fleet_template())
-            self._sweeps[name] = load_sweep(shipped_config("sweeps", f"{name}.toml"), changes=changes,
-                                            seeds=QUICK_SEEDS if self.quick else None)
+            path = shipped_config("sweeps", f"{name}.toml")
+            log.debug(f"  sweep {name}: {path}")
+            self._sweeps[name] = load_sweep(path, changes=changes, seeds=QUICK_SEEDS if self.quick else None)
         return self._sweeps[name]
 
     def out(self, name):
@@ -129,7 +133,7 @@ class Study:
         start = time.perf_counter()
         ran, failures = run_sweep(sweep, out, sweep.runs, self.jobs, progress=Progress())
         self.log(f"  sweep {sweep.name}: {sweep.describe()}; ran {ran} in {time.perf_counter() - start:.1f} s, "
-                 f"{len(sweep.runs) - ran} reused", flush=True)
+                 f"{len(sweep.runs) - ran} reused")
         if failures:
             lines = "\n".join(f"    {run.partition}: {error}" for run, error in failures.items())
             raise SweepError(f"sweep {sweep.name}: {len(failures)} runs failed (dronefleet sweep status "
@@ -323,7 +327,7 @@ DRAW = {"fig16": draw_fig16, "fig17": draw_fig17, "fig18": draw_fig18, "fig19": 
         **{figure: functools.partial(replenishment.draw, figure=figure) for figure in REPLENISHMENT_FIGURES}}
 
 
-def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, log=print):
+def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, log=log.info):
     """Reproduce ``figures`` (names of :data:`FIGURES`): run missing sweeps, tidy, draw.
 
     With ``redraw``, only draw, from the tidy parquet tables already written. Returns the
@@ -341,14 +345,13 @@ def reproduce(figures, results="results", quick=False, jobs=None, redraw=False, 
     drawn = {}
     for figure in figures:
         start = time.perf_counter()
-        log(f"{figure}{' (quick)' if quick else ''}:", flush=True)
+        log(f"{figure}{' (quick)' if quick else ''}:")
         if not redraw:
             for name in NEEDS[figure]:
                 study.ensure(name)
             TIDY[figure](study)
         drawn[figure] = DRAW[figure](study)
-        log(f"  {figure}: {', '.join(str(p) for p in drawn[figure])} ({time.perf_counter() - start:.1f} s)",
-            flush=True)
+        log(f"  {figure}: {', '.join(str(p) for p in drawn[figure])} ({time.perf_counter() - start:.1f} s)")
     return drawn
 
 
@@ -357,7 +360,7 @@ def _same(a, b):
     return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
 
 
-def check(figure, results="results", quick=False, log=print):
+def check(figure, results="results", quick=False, log=log.info):
     """Re-run :data:`CHECK_RUNS` of ``figure`` and compare them with its ``runs.parquet``.
 
     The runs execute one after the other in this process, in a temporary results root
@@ -400,7 +403,7 @@ def check(figure, results="results", quick=False, log=print):
                      f"re-run {value!r}"
                      for column, value in summary.items() if not _same(rows[name, run_id].get(column), value)]
             log(f"  {name} {run_id}: {len(summary)} values, "
-                f"{'identical' if not found else f'{len(found)} differ'}", flush=True)
+                f"{'identical' if not found else f'{len(found)} differ'}")
             differences += found
     return differences
 
@@ -415,13 +418,13 @@ def command(args):
             raise SweepError("--check re-runs runs and --redraw only draws: give one of them")
         differences = [line for figure in figures for line in check(figure, args.results, args.quick)]
         for line in differences:
-            print(f"  differs: {line}")
-        print(f"reproduce {named} --check: "
-              f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
-              f"({time.perf_counter() - start:.1f} s)")
+            log.info(f"  differs: {line}")
+        log.info(f"reproduce {named} --check: "
+                 f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
+                 f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
     reproduce(figures, args.results, args.quick, args.jobs, args.redraw)
-    print(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s")
+    log.info(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s")
     return 0
 
 

@@ -101,7 +101,7 @@ def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dic
         with open(path, "rb") as fh:
             data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the file may have grown
     except OSError as e:
-        raise ConfigError(f"cannot read {where}: {e.strerror or e}") from None
+        raise ConfigError(f"cannot read {where}: {e.strerror or e}{_shipped_hint(path, e)}") from None
     if len(data) > MAX_CONFIG_BYTES:
         raise ConfigError(f"{where} is larger than {MAX_CONFIG_BYTES} bytes; a {kind} is a few KB of TOML")
     try:
@@ -115,6 +115,18 @@ def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dic
         raise ConfigError(f"cannot parse {where}: {e}") from None
     except RecursionError:
         raise ConfigError(f"cannot parse {where}: values nested too deeply") from None
+
+
+def _shipped_hint(path: str | PathLike, error: OSError) -> str:
+    """For a missing ``configs/...`` path (the README's, typed away from the repository): where
+    the file of that name shipped with the package is, if there is one; else ''."""
+    parts = Path(path).parts
+    if not isinstance(error, FileNotFoundError) or len(parts) < 2 or parts[0] != "configs":
+        return ""
+    try:
+        return f" (the one shipped with dronefleet is {shipped_config(*parts[1:])})"
+    except ConfigError:
+        return ""
 
 
 def shipped_config(*parts: str) -> Path:

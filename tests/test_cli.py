@@ -9,6 +9,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from dronefleet import cli, provenance
+from dronefleet.config import shipped_config
 from dronefleet.delivery.records import TABLES, read_config
 
 SHORT = ["--set", "horizon_weeks=0.05", "--set", "n_uavs=5"]
@@ -84,6 +85,16 @@ def test_quiet_prints_nothing_and_verbose_adds_the_resolved_config(tmp_path, cap
     # -q still shows what went wrong
     assert cli.main(["-q", "run", "--set", "tau=5", "--out", str(tmp_path / "bad")]) == 2
     assert "tau_minutes" in capsys.readouterr().err
+
+
+def test_a_configs_path_missing_here_names_the_shipped_file(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # away from the repository: configs/... is not here
+    assert cli.main(["run", "configs/replenishment.toml"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dronefleet: error: cannot read config file 'configs/replenishment.toml': No such file")
+    assert err.endswith(f" (the one shipped with dronefleet is {shipped_config('replenishment.toml')})\n")
+    assert cli.main(["run", "configs/mine.toml"]) == 2  # no such file shipped: no hint
+    assert "shipped" not in capsys.readouterr().err
 
 
 def test_quiet_and_verbose_together_are_refused(capsys):

@@ -27,7 +27,7 @@ def _duration(seconds):
     return f"{int(hours)} h {rest / 60.0:04.1f} min"
 
 
-def format_summary(m, wall_s=None):
+def format_summary(m: dict, wall_s: float | None = None) -> str:
     """The run's summary as printed by ``dronefleet run`` (``m`` from ``metrics.run_metrics``;
     the wall time line only if ``wall_s`` is given)."""
     delivered_pct = 100.0 * m["delivered"] / m["orders_arrived"] if m["orders_arrived"] else float("nan")
@@ -48,7 +48,7 @@ def format_summary(m, wall_s=None):
     return "\n".join(f"  {label:<22}{value}" for label, value in lines)
 
 
-def default_out(name, config, tag=None):
+def default_out(name: str, config, tag: str | None = None) -> Path:
     """``results/runs/<name>-<tag>-<8 hex>`` (``tag`` by default ``seed<N>``): the hex digits start
     the SHA-256 of the resolved config's JSON, so runs of different configs (``--set``, ``--fleet``)
     never share a folder."""
@@ -56,7 +56,7 @@ def default_out(name, config, tag=None):
     return Path("results") / "runs" / f"{name}-{tag or f'seed{config.seed}'}-{digest}"
 
 
-def check_outputs(out, save_fleet, overwrite, tables=None):
+def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables=None) -> None:
     """Refuse, before any work, outputs that the run could not write or would silently replace.
 
     ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder (of the table
@@ -92,7 +92,9 @@ def check_outputs(out, save_fleet, overwrite, tables=None):
     probe_folders([out.parent, *([save_fleet.parent] if save_fleet is not None else [])])
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
+    """``dronefleet run``: a delivery run here (fleet files, the bar in simulated weeks), any other
+    scenario through :func:`run_scenario`; returns the exit code."""
     scenario = scenarios.scenario_of(args.config)
     if scenario.name != "delivery":
         return run_scenario(scenario, args)
@@ -142,7 +144,7 @@ def run(args):
     return 0
 
 
-def run_scenario(scenario, args):
+def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
     """``dronefleet run`` through the scenario contract: load (refusing bad input), check the
     output folder, simulate, write the tables (complete or absent), print the summary."""
     for flag, value in (("--fleet", args.fleet), ("--save-fleet", args.save_fleet)):
@@ -169,7 +171,7 @@ def run_scenario(scenario, args):
     return 0
 
 
-def bounds(args):
+def bounds(args: argparse.Namespace) -> int:
     """``dronefleet bounds CONFIG``: the scenario's analytic bounds (replenishment, spec section 9)."""
     scenario, config = scenarios.load(args.config, args.set)
     if scenario.format_bounds is None:

@@ -67,7 +67,8 @@ def run_configs(configs, jobs=1, done=None) -> pd.DataFrame:
         876 k) run in one ``simulate`` call; the runs of a sweep give them (``run.config``).
     jobs : int
         Processes (:func:`dronefleet.executors.local`; the first configuration runs here
-        and compiles or loads the kernel before any worker starts).
+        and compiles or loads the kernel before any worker starts). A bar counts the
+        configurations done (:func:`dronefleet.console.progress`: on a terminal only).
     done : dict, optional
         Per-trial results by configuration, already run (those are not run again) and
         filled with the ones run here: figures that share configurations, or that run
@@ -79,15 +80,18 @@ def run_configs(configs, jobs=1, done=None) -> pd.DataFrame:
         One row per trial in the order of ``configs`` then trial: :data:`CONFIG_COLUMNS`,
         ``trial``, ``seed`` and :data:`METRIC_COLUMNS`.
     """
+    from ..console import progress
     from ..executors import local
 
     configs = list(configs)
     done = {} if done is None else done
     todo = list(dict.fromkeys(config for config in configs if config not in done))
-    for config, result, error in local(_trials_of, todo, jobs):
-        if error is not None:
-            raise SweepError(f"configuration {config_row(config.params)}: {error}")
-        done[config] = result
+    with progress(len(todo), "configuration", "  configurations") as bar:
+        for config, result, error in local(_trials_of, todo, jobs):
+            if error is not None:
+                raise SweepError(f"configuration {config_row(config.params)}: {error}")
+            done[config] = result
+            bar.update()
     frames = []
     for config in configs:
         trials = config.params.trials

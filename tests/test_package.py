@@ -56,15 +56,16 @@ def installed(tmp_path_factory):
     return site, elsewhere
 
 
-def test_the_wheel_holds_every_module_and_shipped_config(installed):
+def _files(folder, prefix=""):
+    """The files below ``folder`` as ``prefix`` + relative paths, leaving out caches (__pycache__)."""
+    return {prefix + p.relative_to(folder).as_posix() for p in folder.rglob("*")
+            if p.is_file() and "__pycache__" not in p.relative_to(folder).parts}
+
+
+def test_the_wheel_holds_every_file_of_the_package_and_of_configs(installed):
+    # a subpackage or data file missing from pyproject.toml's lists would be missing here
     site, _ = installed
-    shipped = {p.relative_to(site / "dronefleet").as_posix() for p in (site / "dronefleet").rglob("*")
-               if p.suffix in (".py", ".toml", ".yaml")}
-    tree = {p.relative_to(ROOT / "dronefleet").as_posix() for p in (ROOT / "dronefleet").rglob("*")
-            if p.suffix in (".py", ".yaml")}
-    tree |= {f"configs/{p.relative_to(ROOT / 'configs').as_posix()}" for p in (ROOT / "configs").rglob("*")
-             if p.suffix in (".py", ".toml")}
-    assert shipped == tree
+    assert _files(site / "dronefleet") == _files(ROOT / "dronefleet") | _files(ROOT / "configs", "configs/")
 
 
 def test_the_installed_copy_finds_its_configs_and_says_its_version(installed):

@@ -2,37 +2,23 @@
 [--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
 ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig09..fig12|fig16..fig20|all [--quick]``;
 ``dronefleet replay RUN_DIR [--out FILE.html]``.
-A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery."""
+A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery.
+``-q`` prints warnings and errors only, ``-v`` adds debugging detail (before or after the command)."""
 
 import argparse
 import hashlib
+import logging
 import os
 import sys
 import time
 from pathlib import Path
 
-from . import provenance, scenarios, sweep
+from . import console, provenance, scenarios, sweep
 from .config import ConfigError
 from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, probe_folders, writing
 
-
-class ProgressBar:
-    """A one-line bar in simulated weeks on stderr, drawn only on a terminal."""
-
-    def __init__(self, horizon_s, stream=sys.stderr, width=32):
-        self.horizon_s, self.stream, self.width = horizon_s, stream, width
-        self.enabled = stream.isatty()
-
-    def __call__(self, t_s):
-        if not self.enabled:
-            return
-        done = int(self.width * t_s / self.horizon_s)
-        self.stream.write(f"\r  week {t_s / SECONDS_PER_WEEK:4.1f} of {self.horizon_s / SECONDS_PER_WEEK:g} "
-                          f"[{'#' * done}{'.' * (self.width - done)}]")
-        if t_s >= self.horizon_s:
-            self.stream.write("\n")
-        self.stream.flush()
+log = logging.getLogger("dronefleet.cli")  # not __name__: python -m dronefleet.cli runs it as __main__
 
 
 def _duration(seconds):
@@ -42,7 +28,7 @@ def _duration(seconds):
     return f"{int(hours)} h {rest / 60.0:04.1f} min"
 
 
-def format_summary(m, wall_s=None):
+def format_summary(m: dict, wall_s: float | None = None) -> str:
     """The run's summary as printed by ``dronefleet run`` (``m`` from ``metrics.run_metrics``;
     the wall time line only if ``wall_s`` is given)."""
     delivered_pct = 100.0 * m["delivered"] / m["orders_arrived"] if m["orders_arrived"] else float("nan")
@@ -63,7 +49,7 @@ def format_summary(m, wall_s=None):
     return "\n".join(f"  {label:<22}{value}" for label, value in lines)
 
 
-def default_out(name, config, tag=None):
+def default_out(name: str, config, tag: str | None = None) -> Path:
     """``results/runs/<name>-<tag>-<8 hex>`` (``tag`` by default ``seed<N>``): the hex digits start
     the SHA-256 of the resolved config's JSON, so runs of different configs (``--set``, ``--fleet``)
     never share a folder."""
@@ -71,7 +57,7 @@ def default_out(name, config, tag=None):
     return Path("results") / "runs" / f"{name}-{tag or f'seed{config.seed}'}-{digest}"
 
 
-def check_outputs(out, save_fleet, overwrite, tables=None):
+def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables=None) -> None:
     """Refuse, before any work, outputs that the run could not write or would silently replace.
 
     ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder (of the table
@@ -107,7 +93,9 @@ def check_outputs(out, save_fleet, overwrite, tables=None):
     probe_folders([out.parent, *([save_fleet.parent] if save_fleet is not None else [])])
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
+    """``dronefleet run``: a delivery run here (fleet files, the bar in simulated weeks), any other
+    scenario through :func:`run_scenario`; returns the exit code."""
     scenario = scenarios.scenario_of(args.config)
     if scenario.name != "delivery":
         return run_scenario(scenario, args)
@@ -126,12 +114,16 @@ def run(args):
     fleet_out = seeded_path(args.save_fleet, config.seed) if args.save_fleet else None
     check_outputs(out, fleet_out, args.overwrite)
 
-    print(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
-          f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
-          "(the first run on a machine compiles the engine, ~30 s)", flush=True)
+    log.info(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
+             f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
+             "(the first run on a machine compiles the engine, ~30 s)")
+    log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
+    weeks = console.progress(config.horizon_weeks, "week", "  simulated")
     try:
-        result = simulate(config, progress=ProgressBar(config.horizon_s), fleet=fleet)
+        with weeks:
+            result = simulate(config, fleet=fleet,
+                              progress=lambda t_s: weeks.update(t_s / SECONDS_PER_WEEK - weeks.n))
     except (SupervisorError, InvalidStateError, RunTooLargeError) as error:  # nothing written: tables come after
         raise ConfigError(f"the run stopped: {error}") from None
     wall = time.perf_counter() - start
@@ -146,10 +138,10 @@ def run(args):
         if fleet_out is not None:
             fleet_out.unlink(missing_ok=True)
         raise
-    print(format_summary(run_metrics(result), wall))
-    print(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
+    log.info(format_summary(run_metrics(result), wall))
+    log.info(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
     if fleet_out is not None:
-        print(f"  {'saved fleet':<22}{saved}")
+        log.info(f"  {'saved fleet':<22}{saved}")
     _write_replay(args, out)
     return 0
 
@@ -160,7 +152,7 @@ def _write_replay(args, out):
         from . import replay
         from .records import REPLAY_FILE
 
-        print(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE)}")
+        log.info(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE)}")
 
 
 def replay_command(args):
@@ -170,11 +162,11 @@ def replay_command(args):
 
     out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
     written = replay.write(args.run_dir, out)
-    print(f"dronefleet replay: {written} ({written.stat().st_size / 1e6:.1f} MB)")
+    log.info(f"dronefleet replay: {written} ({written.stat().st_size / 1e6:.1f} MB)")
     return 0
 
 
-def run_scenario(scenario, args):
+def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
     """``dronefleet run`` through the scenario contract: load (refusing bad input), check the
     output folder, simulate, write the tables (complete or absent), print the summary."""
     for flag, value in (("--fleet", args.fleet), ("--save-fleet", args.save_fleet)):
@@ -187,21 +179,22 @@ def run_scenario(scenario, args):
 
     from .records import write_tables
 
-    print(f"dronefleet run: {name}, {scenario.describe(config)} "
-          "(the first run on a machine compiles the kernel, ~30 s)", flush=True)
+    log.info(f"dronefleet run: {name}, {scenario.describe(config)} "
+             "(the first run on a machine compiles the kernel, ~30 s)")
+    log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
     tables = scenario.simulate(config)
     wall = time.perf_counter() - start
     with writing(out):
         write_tables(tables, out, config, overwrite=args.overwrite)
-    print(scenario.format_summary(tables))
-    print(f"  {'wall time':<22}{wall:.2f} s")
-    print(f"  {'tables':<22}{out}/{{{','.join(tables)}}}.parquet")
+    log.info(scenario.format_summary(tables))
+    log.info(f"  {'wall time':<22}{wall:.2f} s")
+    log.info(f"  {'tables':<22}{out}/{{{','.join(tables)}}}.parquet")
     _write_replay(args, out)
     return 0
 
 
-def bounds(args):
+def bounds(args: argparse.Namespace) -> int:
     """``dronefleet bounds CONFIG``: the scenario's analytic bounds (replenishment, spec section 9)."""
     scenario, config = scenarios.load(args.config, args.set)
     if scenario.format_bounds is None:
@@ -214,8 +207,33 @@ def bounds(args):
     return 0
 
 
+def _verbosity(default):
+    """A parent parser of ``-q``/``-v`` (the ``logging`` level in ``level``); subcommands get it with
+    ``default=argparse.SUPPRESS``, so that a flag given before the command is not reset after it."""
+    parent = argparse.ArgumentParser(add_help=False)
+    flags = parent.add_mutually_exclusive_group()
+    flags.add_argument("-q", "--quiet", dest="level", action="store_const", const=logging.WARNING, default=default,
+                       help="print warnings and errors only (no progress lines, summaries or bars)")
+    flags.add_argument("-v", "--verbose", dest="level", action="store_const", const=logging.DEBUG, default=default,
+                       help="also print debugging detail (resolved configs, files read, each run done)")
+    return parent
+
+
+class _Commands(argparse._SubParsersAction):
+    """Subcommands that all take ``-q``/``-v``."""
+
+    def add_parser(self, name, **kwargs):
+        kwargs["parents"] = [*kwargs.get("parents", ()), _verbosity(argparse.SUPPRESS)]
+        return super().add_parser(name, **kwargs)
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with usage errors on one line, like every other refusal (exit code 2)."""
+    """argparse with usage errors on one line, like every other refusal (exit code 2), and
+    subcommands (of any depth) that take ``-q``/``-v``."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.register("action", "parsers", _Commands)
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
@@ -232,10 +250,10 @@ class _Version(argparse.Action):
         parser.exit()
 
 
-def build_parser(reproduce_arguments=True):
+def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     """The parser; without ``reproduce_arguments`` the reproduce command is only listed, so that
     ``dronefleet --help`` and ``--version`` do not import pandas and numba (:mod:`dronefleet.reproduce`)."""
-    parser = _Parser(prog="dronefleet", description=__doc__)
+    parser = _Parser(prog="dronefleet", description=__doc__, parents=[_verbosity(logging.INFO)])
     parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
     p = commands.add_parser("run", help="simulate one run and write its tables as parquet")
@@ -357,9 +375,12 @@ def _add_reproduce_command(commands, arguments):
     p.set_defaults(func=reproduce.command)
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
+    """The ``dronefleet`` command with the arguments ``argv`` (default: the process's); returns the
+    exit code: 0 done, 1 failed runs or differences found, 2 bad input, 130 interrupted."""
     argv = sys.argv[1:] if argv is None else argv
     args = build_parser(reproduce_arguments="reproduce" in argv).parse_args(argv)
+    console.configure(args.level)
     try:
         return args.func(args)
     except ConfigError as error:  # bad input (config, sweep, fleet file): refused before any work

@@ -8,6 +8,7 @@ config and sweep file is read the same way and every refusal reads alike:
 * :func:`read_toml`, the one reader of TOML files (regular UTF-8 files of at most
   :data:`MAX_CONFIG_BYTES`, so a pipe or a huge file is refused, not waited on or read);
 * :data:`SCENARIO_KEY`, the top-level key that names a config's scenario;
+* :func:`shipped_config`, the path of a config or sweep file shipped with the package;
 * ``_parse_override`` (``--set key=value``), ``_show``, ``_name`` and ``_suggest`` (values,
   names and "did you mean" in messages).
 """
@@ -15,13 +16,15 @@ config and sweep file is read the same way and every refusal reads alike:
 from __future__ import annotations
 
 import difflib
+import importlib.resources
 import os
 import stat
 import tomllib
 from os import PathLike
+from pathlib import Path
 from typing import Any, Callable, Iterable
 
-__all__ = ["ConfigError", "MAX_CONFIG_BYTES", "SCENARIO_KEY", "read_toml"]
+__all__ = ["ConfigError", "MAX_CONFIG_BYTES", "SCENARIO_KEY", "read_toml", "shipped_config"]
 
 #: Largest config file read [bytes]; real ones are a few KB.
 MAX_CONFIG_BYTES = 1_000_000
@@ -98,7 +101,7 @@ def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dic
         with open(path, "rb") as fh:
             data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the file may have grown
     except OSError as e:
-        raise ConfigError(f"cannot read {where}: {e.strerror or e}") from None
+        raise ConfigError(f"cannot read {where}: {e.strerror or e}{_shipped_hint(path, e)}") from None
     if len(data) > MAX_CONFIG_BYTES:
         raise ConfigError(f"{where} is larger than {MAX_CONFIG_BYTES} bytes; a {kind} is a few KB of TOML")
     try:
@@ -112,3 +115,35 @@ def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dic
         raise ConfigError(f"cannot parse {where}: {e}") from None
     except RecursionError:
         raise ConfigError(f"cannot parse {where}: values nested too deeply") from None
+
+
+def _shipped_hint(path: str | PathLike, error: OSError) -> str:
+    """For a missing ``configs/...`` path (the README's, typed away from the repository): where
+    the file of that name shipped with the package is, if there is one; else ''."""
+    parts = Path(path).parts
+    if not isinstance(error, FileNotFoundError) or len(parts) < 2 or parts[0] != "configs":
+        return ""
+    try:
+        return f" (the one shipped with dronefleet is {shipped_config(*parts[1:])})"
+    except ConfigError:
+        return ""
+
+
+def shipped_config(*parts: str) -> Path:
+    """The path of a file shipped in the repository's ``configs/``, e.g. ``shipped_config("sweeps",
+    "rules.toml")``, whatever the working directory.
+
+    An installed dronefleet (wheel, ``pip install .`` or ``-e .``) has them as the package
+    ``dronefleet.configs``; a source tree put on ``sys.path`` without installing has them beside
+    the package. ConfigError if the file is not there.
+    """
+    try:
+        # Path(): installed packages are folders on disk (numba's cache needs one), never zip files
+        root = Path(importlib.resources.files("dronefleet.configs"))
+    except ModuleNotFoundError:  # not installed (or installed before configs were packaged)
+        root = Path(__file__).resolve().parent.parent / "configs"
+    path = root.joinpath(*parts)
+    if not path.is_file():
+        raise ConfigError(f"the shipped config {'/'.join(parts)} is missing (looked for {path}): "
+                          "reinstall dronefleet")
+    return path

@@ -39,6 +39,7 @@ command lists what differs (exit 1). It only reads: the committed ``results/`` u
 """
 
 import functools
+import logging
 import os
 import sys
 import tempfile
@@ -49,11 +50,14 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .config import shipped_config
 from .delivery import analysis
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
 from .sweep import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
+
+log = logging.getLogger("dronefleet.reproduce")  # not __name__: it also runs as __main__
 
 #: Where reproduce writes unless told otherwise: beside, never over, the committed results.
 DEFAULT_OUT = Path("dronefleet-results")
@@ -90,19 +94,10 @@ CHECK_RUNS = {
 }
 
 
-def sweeps_dir():
-    """``configs/sweeps`` of the source tree this package runs from."""
-    path = Path(__file__).resolve().parent.parent / "configs" / "sweeps"
-    if not path.is_dir():
-        raise SweepError(f"reproduce needs the sweep files of the source tree ({path} is missing): "
-                         "run it from a clone of the repository (pip install -e .)")
-    return path
-
-
 class Study:
     """The study's sweeps under one results root: loaded (validated) once, run on demand."""
 
-    def __init__(self, results, quick=False, jobs=None, log=print, theta=None):
+    def __init__(self, results, quick=False, jobs=None, log=log.info, theta=None):
         self.root = Path(results) / "quick" if quick else Path(results)
         self.quick = quick
         self.theta = theta      # Figure 19's threshold, %; None: the study's criterion picks it
@@ -119,8 +114,9 @@ class Study:
             changes = dict(QUICK_CHANGES) if self.quick else {}
             if name == "reservations":
                 changes["fleet_file"] = str(self.fleet_template())
-            self._sweeps[name] = load_sweep(sweeps_dir() / f"{name}.toml", changes=changes,
-                                            seeds=QUICK_SEEDS if self.quick else None)
+            path = shipped_config("sweeps", f"{name}.toml")
+            log.debug(f"  sweep {name}: {path}")
+            self._sweeps[name] = load_sweep(path, changes=changes, seeds=QUICK_SEEDS if self.quick else None)
         return self._sweeps[name]
 
     def out(self, name):
@@ -150,7 +146,7 @@ class Study:
         start = time.perf_counter()
         ran, failures = run_sweep(sweep, out, sweep.runs, self.jobs, progress=Progress())
         self.log(f"  sweep {sweep.name}: {sweep.describe()}; ran {ran} in {time.perf_counter() - start:.1f} s, "
-                 f"{len(sweep.runs) - ran} reused", flush=True)
+                 f"{len(sweep.runs) - ran} reused")
         if failures:
             lines = "\n".join(f"    {run.partition}: {error}" for run, error in failures.items())
             raise SweepError(f"sweep {sweep.name}: {len(failures)} runs failed (dronefleet sweep status "
@@ -288,7 +284,7 @@ def tidy_fig19(study):
     _write_parquet(table, d / "thresholds.parquet")
     chosen_by = "the study's criterion" if study.theta is None else "--theta"
     best = best if study.theta is None else study.theta
-    study.log(f"  fig19: threshold(theta = {best:g}) beside learning, chosen by {chosen_by}", flush=True)
+    study.log(f"  fig19: threshold(theta = {best:g}) beside learning, chosen by {chosen_by}")
     horizon = study.horizon_s("thresholds")
     learning = analysis.run_outcomes(study.table("rules", "summary", rule="least_confident"))
     backlog = analysis.backlog_by_arrival_week(study.table("thresholds", "orders", theta=best), horizon, by=by)
@@ -347,7 +343,7 @@ def _check_theta(study, figures, redraw):
                          f"{', '.join(f'{value:g}' for value in sweep.grid['theta'])}")
 
 
-def reproduce(figures, out=DEFAULT_OUT, quick=False, jobs=None, redraw=False, log=print, theta=None):
+def reproduce(figures, out=DEFAULT_OUT, quick=False, jobs=None, redraw=False, log=log.info, theta=None):
     """Reproduce ``figures`` (names of :data:`FIGURES`) under the results root ``out``: run
     missing sweeps, tidy, draw.
 
@@ -368,14 +364,14 @@ def reproduce(figures, out=DEFAULT_OUT, quick=False, jobs=None, redraw=False, lo
     drawn = {}
     for figure in figures:
         start = time.perf_counter()
-        log(f"{figure}{' (quick)' if quick else ''}:", flush=True)
+        log(f"{figure}{' (quick)' if quick else ''}:")
         if not redraw:
             for name in NEEDS[figure]:
                 study.ensure(name)
             TIDY[figure](study)
         drawn[figure] = DRAW[figure](study)
         log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
-            f"({time.perf_counter() - start:.1f} s)", flush=True)
+            f"({time.perf_counter() - start:.1f} s)")
     return drawn
 
 
@@ -384,7 +380,7 @@ def _same(a, b):
     return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
 
 
-def check(figure, results=COMMITTED_RESULTS, quick=False, log=print):
+def check(figure, results=COMMITTED_RESULTS, quick=False, log=log.info):
     """Re-run :data:`CHECK_RUNS` of ``figure`` and compare them with its ``runs.parquet``.
 
     The runs execute one after the other in this process, in a temporary results root
@@ -427,7 +423,7 @@ def check(figure, results=COMMITTED_RESULTS, quick=False, log=print):
                      f"re-run {value!r}"
                      for column, value in summary.items() if not _same(rows[name, run_id].get(column), value)]
             log(f"  {name} {run_id}: {len(summary)} values, "
-                f"{'identical' if not found else f'{len(found)} differ'}", flush=True)
+                f"{'identical' if not found else f'{len(found)} differ'}")
             differences += found
     return differences
 
@@ -448,14 +444,14 @@ def command(args):
             raise SweepError("--check re-runs runs and --theta chooses what fig19 draws: give one of them")
         differences = [line for figure in figures for line in check(figure, root, args.quick)]
         for line in differences:
-            print(f"  differs: {line}")
-        print(f"reproduce {named} --check: "
-              f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
-              f"({time.perf_counter() - start:.1f} s)")
+            log.info(f"  differs: {line}")
+        log.info(f"reproduce {named} --check: "
+                 f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
+                 f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
     reproduce(figures, root, args.quick, args.jobs, args.redraw, theta=args.theta)
-    print(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s, "
-          f"under {Path(root) / 'quick' if args.quick else root}")
+    log.info(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s, "
+             f"under {Path(root) / 'quick' if args.quick else root}")
     return 0
 
 

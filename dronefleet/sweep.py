@@ -88,6 +88,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import logging
 import math
 import os
 import re
@@ -101,10 +102,12 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from . import scenarios
+from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, read_toml
 from .outputs import OutputError, probe_folders
 from .scenarios import Scenario
+
+log = logging.getLogger(__name__)
 
 #: Environment variables that give a job-array task's index, with the index of the
 #: scheduler's first task: SGE and LSF arrays start at 1, so their task k is index k + 1.
@@ -459,7 +462,7 @@ def execute(run: Run, out: Path) -> str | None:
 
 
 def _report(message: str) -> None:
-    print(f"dronefleet: warning: {message}", file=sys.stderr, flush=True)
+    log.warning(f"dronefleet: warning: {message}")
 
 
 def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
@@ -654,22 +657,19 @@ def available_cpus() -> int:
 
 
 class Progress:
-    """A one-line count of finished runs on stderr, drawn only on a terminal."""
+    """``run_sweep``'s ``progress``: finished runs as a tqdm bar with the failures counted,
+    drawn as :func:`dronefleet.console.progress` says (on a terminal, without ``-q``)."""
 
-    def __init__(self, stream=sys.stderr, width=32):
-        self.stream, self.width = stream, width
-        self.enabled = stream.isatty()
-        self.start = time.perf_counter()
+    def __init__(self) -> None:
+        self.bar = None  # made at the first call, which tells the number of runs
 
-    def __call__(self, finished, total, failed):
-        if not self.enabled:
-            return
-        bar = int(self.width * finished / total)
-        self.stream.write(f"\r  runs {finished}/{total} [{'#' * bar}{'.' * (self.width - bar)}] "
-                          f"{failed} failed, {_duration(time.perf_counter() - self.start)}")
+    def __call__(self, finished: int, total: int, failed: int) -> None:
+        if self.bar is None:
+            self.bar = console.progress(total, "run", "  runs")
+        self.bar.set_postfix_str(f"{failed} failed", refresh=False)
+        self.bar.update(finished - self.bar.n)
         if finished == total:
-            self.stream.write("\n")
-        self.stream.flush()
+            self.bar.close()
 
 
 def _duration(seconds: float) -> str:
@@ -712,6 +712,7 @@ def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | Non
                                     "".join(traceback.format_exception(crash)))
         if error is not None:
             failures[run] = error
+        log.debug(f"  run {run.partition}: {'done' if error is None else f'failed: {error}'}")
         if progress is not None:
             progress(finished, len(todo), len(failures))
     return len(todo), failures
@@ -868,20 +869,20 @@ def run_command(args) -> int:
     jobs = args.jobs or (1 if task is not None else available_cpus())
     where = (f"on the Dask cluster at {args.scheduler}" if args.executor == "dask"
              else f"on {jobs} process{'es' if jobs > 1 else ''}")
-    print(f"sweep {sweep.name}: {sweep.describe()}; "
-          f"{'all runs' if task is None else f'task {task}: {len(runs)} runs'} {where}", flush=True)
+    log.info(f"sweep {sweep.name}: {sweep.describe()}; "
+             f"{'all runs' if task is None else f'task {task}: {len(runs)} runs'} {where}")
+    log.debug(f"  sweep file {sweep.path}")
     start = time.perf_counter()
     try:
         ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
     except KeyboardInterrupt:
-        print(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on",
-              file=sys.stderr)
+        log.warning(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
         return 130  # the shell's code for a command stopped by Ctrl-C
     wall = time.perf_counter() - start
-    print(f"sweep {sweep.name}: ran {ran}, skipped {len(runs) - ran} done before, {len(failures)} failed, "
-          f"in {_duration(wall)}; dataset {out}")
+    log.info(f"sweep {sweep.name}: ran {ran}, skipped {len(runs) - ran} done before, {len(failures)} failed, "
+             f"in {_duration(wall)}; dataset {out}")
     for run, error in failures.items():
-        print(f"  failed  {run.partition}: {error}", file=sys.stderr)
+        log.warning(f"  failed  {run.partition}: {error}")
     return 1 if failures else 0
 
 
@@ -916,5 +917,5 @@ def collect_command(args) -> int:
     print(f"sweep {sweep.name}: {len(sweep.runs) - len(not_done)} of {len(sweep.runs)} runs in "
           f"{out / 'collected.parquet'} ({table.num_rows} rows, {table.num_columns} columns)")
     if not_done:
-        print(f"  {len(not_done)} runs are not done (see sweep status); they have no row", file=sys.stderr)
+        log.warning(f"  {len(not_done)} runs are not done (see sweep status); they have no row")
     return 1 if not_done else 0

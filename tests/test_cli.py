@@ -1,11 +1,15 @@
 """The ``dronefleet run`` command: outputs, summary, refusal of bad input before any work."""
 
 import io
+import json
+import subprocess
+import sys
 
 import pyarrow.parquet as pq
 import pytest
 
-from dronefleet import cli
+from dronefleet import cli, provenance
+from dronefleet.config import shipped_config
 from dronefleet.delivery.records import TABLES, read_config
 
 SHORT = ["--set", "horizon_weeks=0.05", "--set", "n_uavs=5"]
@@ -49,21 +53,64 @@ def test_bad_input_is_refused_before_any_work(tmp_path, capsys, args, message):
     assert not out.exists()
 
 
-def test_progress_bar_draws_weeks_only_on_a_terminal():
-    class Terminal(io.StringIO):
-        def isatty(self):
-            return True
+class Terminal(io.StringIO):
+    """A stream that says it is a terminal, as stderr is in an interactive shell."""
 
-    stream = Terminal()
-    bar = cli.ProgressBar(8 * 604800.0, stream=stream, width=8)
-    bar(4 * 604800.0)
-    assert "week  4.0 of 8 [####....]" in stream.getvalue()
-    bar(8 * 604800.0)
-    assert stream.getvalue().endswith("[########]\n")
+    def isatty(self):
+        return True
 
-    quiet = io.StringIO()
-    cli.ProgressBar(8 * 604800.0, stream=quiet)(604800.0)
-    assert quiet.getvalue() == ""
+
+def test_a_run_draws_its_week_bar_only_on_a_terminal_and_not_with_quiet(tmp_path, monkeypatch):
+    drawn = {}
+    for name, stream, flags in (("terminal", Terminal(), []), ("pipe", io.StringIO(), []),
+                                ("quiet", Terminal(), ["-q"])):
+        monkeypatch.setattr(sys, "stderr", stream)
+        assert cli.main([*flags, "run", *SHORT, "--out", str(tmp_path / name)]) == 0
+        drawn[name] = stream.getvalue()
+    assert "simulated" in drawn["terminal"] and "week" in drawn["terminal"]
+    assert drawn["pipe"] == drawn["quiet"] == ""
+
+
+def test_quiet_prints_nothing_and_verbose_adds_the_resolved_config(tmp_path, capsys):
+    assert cli.main(["run", *SHORT, "--out", str(tmp_path / "normal")]) == 0
+    normal = capsys.readouterr()
+    assert "orders arrived" in normal.out and "config {" not in normal.out and normal.err == ""
+    assert cli.main(["-q", "run", *SHORT, "--out", str(tmp_path / "quiet")]) == 0
+    assert capsys.readouterr() == ("", "")
+    assert cli.main(["run", *SHORT, "--out", str(tmp_path / "verbose"), "--verbose"]) == 0  # after the command too
+    verbose = capsys.readouterr().out
+    config = json.loads(next(line for line in verbose.splitlines() if line.startswith("  config {"))[len("  config "):])
+    assert (config["fleet"]["n_uavs"], config["run"]["horizon_weeks"]) == (5, 0.05)
+    assert "orders arrived" in verbose
+    # -q still shows what went wrong
+    assert cli.main(["-q", "run", "--set", "tau=5", "--out", str(tmp_path / "bad")]) == 2
+    assert "tau_minutes" in capsys.readouterr().err
+
+
+def test_a_configs_path_missing_here_names_the_shipped_file(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # away from the repository: configs/... is not here
+    assert cli.main(["run", "configs/replenishment.toml"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dronefleet: error: cannot read config file 'configs/replenishment.toml': No such file")
+    assert err.endswith(f" (the one shipped with dronefleet is {shipped_config('replenishment.toml')})\n")
+    assert cli.main(["run", "configs/mine.toml"]) == 2  # no such file shipped: no hint
+    assert "shipped" not in capsys.readouterr().err
+
+
+def test_quiet_and_verbose_together_are_refused(capsys):
+    with pytest.raises(SystemExit) as end:
+        cli.main(["run", "-q", "-v"])
+    assert end.value.code == 2 and "not allowed with argument" in capsys.readouterr().err
+
+
+def test_python_dash_m_dronefleet_is_the_command():
+    done = subprocess.run([sys.executable, "-m", "dronefleet", "--version"], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == provenance.version_line() + "\n"
+    done = subprocess.run([sys.executable, "-m", "dronefleet", "run", "--bad-flag"], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 2 and done.stderr.startswith("dronefleet: error: unrecognized arguments: --bad-flag")
 
 
 @pytest.mark.parametrize("error", ["SupervisorError", "InvalidStateError"])

@@ -3,6 +3,7 @@ replenishment scenario's config, ``run`` and ``bounds`` commands."""
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -14,6 +15,8 @@ from dronefleet.delivery.config import load_config
 from dronefleet.replenishment import Params, constant_supply_bounds, fixed_bounds
 
 # A tiny run of each registered scenario (a new scenario must add one): config file text, --set.
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"   # read from any working directory
+REPLENISHMENT, PAPER = CONFIGS / "replenishment.toml", CONFIGS / "paper.toml"
 TINY = {
     "delivery": ("", ["horizon_weeks=0.02", "n_uavs=3"]),
     "replenishment": ('scenario = "replenishment"\n', ["trials=2", "ticks=300"]),
@@ -105,16 +108,16 @@ def test_configs_without_the_key_or_naming_delivery_stay_delivery(tmp_path):
 
 def test_the_delivery_loader_refuses_a_replenishment_config_in_one_line():
     with pytest.raises(ConfigError, match="is for scenario 'replenishment'; only a delivery config"):
-        load_config("configs/replenishment.toml")
+        load_config(REPLENISHMENT)
 
 
 def test_the_committed_config_is_the_documented_default():
-    scenario, config = scenarios.load("configs/replenishment.toml")
+    scenario, config = scenarios.load(REPLENISHMENT)
     assert scenario.name == "replenishment"
     assert config.to_json() == scenario.load(None).to_json()
     assert (config.params.strategy, config.params.n_chargers, config.params.charger_capacity_factor,
             config.params.trials, config.params.ticks, config.first_trial) == ("mobile", 6, 2.0, 50, 6000, 1)
-    text = open("configs/replenishment.toml").read()
+    text = REPLENISHMENT.read_text()
     for key in scenario.schema:
         assert f"\n{key} = " in text  # every key spelled out (and commented) in the file
 
@@ -133,7 +136,7 @@ def test_set_takes_bare_and_section_keys_with_strict_types():
 
 
 def _run(tmp_path, *sets, out="run"):
-    args = ["run", "configs/replenishment.toml", "--set", "trials=2", "--set", "ticks=300"]
+    args = ["run", str(REPLENISHMENT), "--set", "trials=2", "--set", "ticks=300"]
     for s in sets:
         args += ["--set", s]
     assert cli.main([*args, "--out", str(tmp_path / out)]) == 0
@@ -199,7 +202,7 @@ def test_default_folder_and_output_safety_are_delivery_s(tmp_path, monkeypatch, 
 
 
 def _bounds_printed(capsys, *args):
-    assert cli.main(["bounds", "configs/replenishment.toml", *args]) == 0
+    assert cli.main(["bounds", str(REPLENISHMENT), *args]) == 0
     rows = {}
     for line in capsys.readouterr().out.splitlines()[1:]:
         parts = line.split()
@@ -224,11 +227,11 @@ def test_bounds_follow_set(capsys):
 
 
 @pytest.mark.parametrize("args, why", [
-    (["configs/replenishment.toml", "--set", "transfer_loss=0.999"], "(1 - lambda) v_charge = 0.001 must exceed"),
-    (["configs/replenishment.toml", "--set", "charge_rate=0.005"], "v_charge = 0.005 must exceed v_min"),
-    (["configs/replenishment.toml", "--set", "worker_capacity=10"], "round-trip cost"),
-    (["configs/paper.toml"], "bounds exist only for replenishment"),
-    (["configs/replenishment.toml", "--set", "transfer_loss=1"], "transfer_loss = 1.0 is not allowed"),
+    ([str(REPLENISHMENT), "--set", "transfer_loss=0.999"], "(1 - lambda) v_charge = 0.001 must exceed"),
+    ([str(REPLENISHMENT), "--set", "charge_rate=0.005"], "v_charge = 0.005 must exceed v_min"),
+    ([str(REPLENISHMENT), "--set", "worker_capacity=10"], "round-trip cost"),
+    ([str(PAPER)], "bounds exist only for replenishment"),
+    ([str(REPLENISHMENT), "--set", "transfer_loss=1"], "transfer_loss = 1.0 is not allowed"),
 ])
 def test_bounds_refuse_where_none_exists(capsys, args, why):
     assert cli.main(["bounds", *args]) == 2
@@ -266,7 +269,7 @@ def test_bounds_refuse_where_none_exists(capsys, args, why):
     ('scenario = "replenishment"\n[run]\nn_workers = 5\n', [], "run.n_workers belongs in [robots]"),
 ])
 def test_hostile_input_is_refused_in_one_line_before_any_work(tmp_path, capsys, file_text, args, message):
-    path = "configs/replenishment.toml" if file_text is None else _config_file(tmp_path, file_text)
+    path = REPLENISHMENT if file_text is None else _config_file(tmp_path, file_text)
     out = tmp_path / "run"
     assert cli.main(["run", str(path), *args, "--out", str(out)]) == 2
     captured = capsys.readouterr()

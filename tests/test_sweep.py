@@ -2,6 +2,7 @@
 
 import io
 import json
+import logging
 import multiprocessing
 import os
 import shutil
@@ -21,7 +22,7 @@ import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 import pytest
 
-from dronefleet import cli, scenarios, sweep as sw
+from dronefleet import cli, console, scenarios, sweep as sw
 from dronefleet.delivery import simulation
 from dronefleet.delivery.config import default_config, replace
 from dronefleet.delivery.records import TABLES
@@ -211,15 +212,26 @@ def test_plan_writes_a_job_array_script(tmp_path, monkeypatch, capsys):
     assert "#SBATCH --array=0-3\n" in out.read_text()
 
 
-def test_progress_is_one_line_on_a_terminal_only():
+def test_progress_is_a_bar_of_runs_on_a_terminal_only(monkeypatch):
     class Terminal(io.StringIO):
         def isatty(self):
             return True
 
-    terminal, pipe = Terminal(), io.StringIO()
-    sw.Progress(terminal, width=8)(2, 8, 1)
-    sw.Progress(pipe)(2, 8, 1)
-    assert terminal.getvalue().startswith("\r  runs 2/8 [##......] 1 failed, ") and pipe.getvalue() == ""
+    drawn, logger = {}, logging.getLogger(console.LOGGER)
+    previous = logger.level
+    try:
+        for name, stream, level in (("terminal", Terminal(), logging.INFO), ("pipe", io.StringIO(), logging.INFO),
+                                    ("quiet", Terminal(), logging.WARNING)):
+            monkeypatch.setattr(sys, "stderr", stream)
+            console.configure(level)
+            progress = sw.Progress()
+            for finished in range(1, 9):
+                progress(finished, 8, finished // 3)
+            drawn[name] = stream.getvalue()
+    finally:
+        logger.setLevel(previous)
+    assert "  runs:" in drawn["terminal"] and "/8 " in drawn["terminal"]
+    assert drawn["pipe"] == drawn["quiet"] == ""
 
 
 # ---------------------------------------------------------------------------- the dataset

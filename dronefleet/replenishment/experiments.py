@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..config import shipped_config
 from ..sweep import SweepError
 from .bounds import BoundUndefinedError, bounds
 from .params import Params
@@ -39,12 +40,8 @@ METRIC_COLUMNS = ("work", "energy", "work_energy", "efficiency", "efficiency_wit
 
 
 def grid_path(figure: str) -> Path:
-    """``configs/sweeps/replenishment-<figure>.toml`` of the source tree this package runs from."""
-    path = Path(__file__).resolve().parents[2] / "configs" / "sweeps" / f"replenishment-{figure}.toml"
-    if not path.is_file():
-        raise SweepError(f"the grid of {figure} needs {path}, which is missing: run from a clone of the "
-                         "repository (pip install -e .)")
-    return path
+    """``configs/sweeps/replenishment-<figure>.toml``, shipped with the package."""
+    return shipped_config("sweeps", f"replenishment-{figure}.toml")
 
 
 def config_row(params: Params) -> dict:
@@ -70,7 +67,8 @@ def run_configs(configs, jobs=1, done=None) -> pd.DataFrame:
         876 k) run in one ``simulate`` call; the runs of a sweep give them (``run.config``).
     jobs : int
         Processes (:func:`dronefleet.executors.local`; the first configuration runs here
-        and compiles or loads the kernel before any worker starts).
+        and compiles or loads the kernel before any worker starts). A bar counts the
+        configurations done (:func:`dronefleet.console.progress`: on a terminal only).
     done : dict, optional
         Per-trial results by configuration, already run (those are not run again) and
         filled with the ones run here: figures that share configurations, or that run
@@ -82,15 +80,18 @@ def run_configs(configs, jobs=1, done=None) -> pd.DataFrame:
         One row per trial in the order of ``configs`` then trial: :data:`CONFIG_COLUMNS`,
         ``trial``, ``seed`` and :data:`METRIC_COLUMNS`.
     """
+    from ..console import progress
     from ..executors import local
 
     configs = list(configs)
     done = {} if done is None else done
     todo = list(dict.fromkeys(config for config in configs if config not in done))
-    for config, result, error in local(_trials_of, todo, jobs):
-        if error is not None:
-            raise SweepError(f"configuration {config_row(config.params)}: {error}")
-        done[config] = result
+    with progress(len(todo), "configuration", "  configurations") as bar:
+        for config, result, error in local(_trials_of, todo, jobs):
+            if error is not None:
+                raise SweepError(f"configuration {config_row(config.params)}: {error}")
+            done[config] = result
+            bar.update()
     frames = []
     for config in configs:
         trials = config.params.trials

@@ -59,7 +59,7 @@ def run_together(study, figures):
     start = time.perf_counter()
     experiments.run_configs(configs, study.jobs, done=study.memo.setdefault("replenishment", {}))
     study.log(f"replenishment grids of {', '.join(figures)}: {len(set(configs))} distinct configurations "
-              f"in {time.perf_counter() - start:.1f} s", flush=True)
+              f"in {time.perf_counter() - start:.1f} s")
 
 
 def tidy(study, figure):
@@ -76,7 +76,7 @@ def tidy(study, figure):
     first = configs[0].params
     study.log(f"  {sweep.name}: {len(configs)} configurations x {first.trials} trials of {first.ticks} ticks"
               + (f", {ran_before} run with the other figures" if ran_before else "")
-              + f"; {time.perf_counter() - start:.1f} s", flush=True)
+              + f"; {time.perf_counter() - start:.1f} s")
     d = study.figure_dir(figure)
     _write_parquet(runs, d / "runs.parquet")
     _write_parquet(experiments.bounds_table([config.params for config in configs]), d / "bounds.parquet")
@@ -129,7 +129,6 @@ def check(study, figure):
                  for column in fresh.columns
                  for trial, old, new in zip(fresh["trial"], mine[column].tolist(), fresh[column].tolist())
                  if not _same(old, new)]
-        study.log(f"  {label}: {fresh.size} values, {'identical' if not found else f'{len(found)} differ'}",
-                  flush=True)
+        study.log(f"  {label}: {fresh.size} values, {'identical' if not found else f'{len(found)} differ'}")
         differences += found
     return differences

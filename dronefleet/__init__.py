@@ -1,6 +1,6 @@
 """dronefleet: event-driven simulator of on-demand parcel delivery by UAV fleets.
 
-The model is ``MODEL.md`` of the study; the tree follows its domain:
+The model is ``docs/delivery-model.md`` of the study; the tree follows its domain:
 orders, energy, policy, auction, supervisor, engine, records, config, cli.
 
 From Python: ``dronefleet.run(...)`` simulates one run, ``dronefleet.sweep(grid, ...)`` a

@@ -195,7 +195,7 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
 
 
 def bounds(args: argparse.Namespace) -> int:
-    """``dronefleet bounds CONFIG``: the scenario's analytic bounds (replenishment, spec section 9)."""
+    """``dronefleet bounds CONFIG``: the scenario's analytic bounds (docs/replenishment-model.md section 9)."""
     scenario, config = scenarios.load(args.config, args.set)
     if scenario.format_bounds is None:
         having = [s.name for s in scenarios.SCENARIOS.values() if s.format_bounds is not None]
@@ -284,7 +284,7 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
     p.set_defaults(func=replay_command)
     p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
-                            description="Work and efficiency bounds of REPLENISHMENT.md section 9, both "
+                            description="Work and efficiency bounds of docs/replenishment-model.md section 9, both "
                                         "strategies; refused (exit 2) where a bound does not exist.")
     p.add_argument("config", help="TOML config file with scenario = \"replenishment\"")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",

@@ -1,4 +1,4 @@
-"""Reproduce the study's figures (EXPERIMENTS.md, Figures 16-20; REPLENISHMENT.md, Figures 9-12).
+"""Reproduce the study's figures (Figures 16-20: docs/delivery-experiments.md; 9-12: docs/replenishment-model.md).
 
 ``dronefleet reproduce FIGURE... [--quick] [--jobs J] [--out DIR | --update-results] [--redraw | --check]
 [--theta N]``, FIGURE one or more of fig09..fig12, fig16..fig20, or ``all``. Figures 9-12 (energy

@@ -1,6 +1,6 @@
-"""Shared helpers of the model tests: MODEL.md physics by hand, hand-made scenarios, forced policies.
+"""Shared helpers of the model tests: docs/delivery-model.md physics by hand, hand-made scenarios, forced policies.
 
-Everything "expected" in the tests is computed from the formulas of MODEL.md here, in plain
+Everything "expected" in the tests is computed from the formulas of docs/delivery-model.md here, in plain
 Python, never with the engine's own functions.
 """
 
@@ -15,9 +15,9 @@ from dronefleet.delivery import auction, simulation
 from dronefleet.delivery.orders import Orders
 
 WEEK = 7 * 24 * 3600.0
-DELTA = 2.0  # advertising period of MODEL.md section 4
+DELTA = 2.0  # advertising period of docs/delivery-model.md section 4
 
-# MODEL.md section 2, default parameters.
+# docs/delivery-model.md section 2, default parameters.
 G, M_FRAME, M_BATTERY, N_ROTORS, ZETA, RHO = 9.81, 10.0, 10.0, 8, 0.27, 1.225
 SPEED, CAPACITY, P_CHARGER, GAMMA = 10.0, 800.0, 100.0, 0.95
 K = GAMMA * P_CHARGER / (3600.0 * CAPACITY)  # 1/s
@@ -26,7 +26,7 @@ SIGMA = (1443.38, 1.298, 28.87)
 
 
 def power(payload_kg):
-    """P(m_p) of MODEL.md section 2, W."""
+    """P(m_p) of docs/delivery-model.md section 2, W."""
     return (G * (M_FRAME + M_BATTERY + payload_kg)) ** 1.5 / math.sqrt(2.0 * N_ROTORS * RHO * ZETA)
 
 

@@ -1,4 +1,4 @@
-"""Closed-form energy of MODEL.md sections 2 and 3, checked against the formulas by hand."""
+"""Closed-form energy of docs/delivery-model.md sections 2 and 3, checked against the formulas by hand."""
 
 import math
 

@@ -1,8 +1,8 @@
-"""The event loop against MODEL.md: advertising, event instants, winner rules, loss, supervisor,
+"""The event loop against docs/delivery-model.md: advertising, event instants, winner rules, loss, supervisor,
 learning, the tick skip, determinism and the half-run property.
 
 Hand-made scenarios (1 to 3 UAVs, a handful of orders) force decisions through the policy
-arrays; every expected number comes from the formulas of MODEL.md (see conftest), not from
+arrays; every expected number comes from the formulas of docs/delivery-model.md (see conftest), not from
 the engine's functions.
 """
 
@@ -35,7 +35,7 @@ def _takeoffs(result):
 
 
 def _advertised(arrivals, ticks):
-    """Order advertised at each tick by the rule of MODEL.md section 4, if nobody bids in between."""
+    """Order advertised at each tick by the rule of docs/delivery-model.md section 4, if nobody bids in between."""
     last, out = None, []
     for tick in ticks:
         queued = [j for j, a in enumerate(arrivals) if a <= tick]
@@ -491,7 +491,7 @@ def test_learning_after_an_abort():
 
 
 def _check_run_against_model(r, c):
-    """Every attempt of a run against the closed forms of MODEL.md sections 2 and 3."""
+    """Every attempt of a run against the closed forms of docs/delivery-model.md sections 2 and 3."""
     a, o = r.attempts, r.orders
     soh = r.snapshots[-1]["soh"]
     horizon = c.horizon_s

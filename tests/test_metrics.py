@@ -34,7 +34,7 @@ def _standardised_soc_weight(soc_cut):
 
 
 def test_decision_accuracy_against_ground_truth_by_hand():
-    # Ground truth by MODEL.md section 3 at SoH 1 and 0.5.
+    # Ground truth by docs/delivery-model.md section 3 at SoH 1 and 0.5.
     points = np.array([[1000.0, 0.5, 100.0],   # easy: capable at both SoH
                        [6000.0, 5.0, 5.0],     # hopeless: capable at neither
                        [6000.0, 5.0, 100.0]])  # capable only at SoH 1

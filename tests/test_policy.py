@@ -14,7 +14,7 @@ from dronefleet.delivery.policy import (
     to_sgdclassifier,
 )
 
-# MODEL.md sections 1 and 6.
+# docs/delivery-model.md sections 1 and 6.
 MEAN = np.array([3500.0, 2.75, 50.0])
 STD = np.array([1443.38, 1.298, 28.87])
 DISTANCE_RANGE = (1000.0, 6000.0)

@@ -1,4 +1,5 @@
-"""A run's tables, metrics and parquet files (MODEL.md sections 10 and 11; delivery/records.py, records.py)."""
+"""A run's tables, metrics and parquet files
+(docs/delivery-model.md sections 10 and 11; delivery/records.py, records.py)."""
 
 import json
 import math

@@ -1,4 +1,4 @@
-"""Figures 9-12 of the replenishment study: the grids of REPLENISHMENT.md section 10 (sweep files),
+"""Figures 9-12 of the replenishment study: the grids of docs/replenishment-model.md section 10 (sweep files),
 ``dronefleet reproduce fig09..fig12`` (tables, figure files, --redraw, --check) and the bounds they draw."""
 
 import importlib

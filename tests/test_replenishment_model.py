@@ -1,4 +1,4 @@
-"""The replenishment simulator against REPLENISHMENT.md, rule by rule.
+"""The replenishment simulator against docs/replenishment-model.md, rule by rule.
 
 Runs are short (few ticks and trials) and reuse module-scoped results; the
 expected values are computed here by hand from the spec's rates and speeds.

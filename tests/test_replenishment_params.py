@@ -1,4 +1,4 @@
-"""Replenishment parameters and analytic bounds (REPLENISHMENT.md sections 2 and 9)."""
+"""Replenishment parameters and analytic bounds (docs/replenishment-model.md sections 2 and 9)."""
 
 import pytest
 

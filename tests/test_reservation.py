@@ -1,4 +1,4 @@
-"""Reservation bids (MODEL.md section 9) and saved fleets (warm starts).
+"""Reservation bids (docs/delivery-model.md section 9) and saved fleets (warm starts).
 
 Hand-made scenarios check the rules against closed forms computed here; whole runs from a
 saved fleet are checked against an independent replay of the policies from the tables.
@@ -331,7 +331,7 @@ def test_lost_uavs_stay_lost_in_a_warm_start(tmp_path):
 
 
 def _replay_policies(fleet0, attempts, orders, config):
-    """Every UAV's policy after each landing, replayed from the attempt table (MODEL.md section 8).
+    """Every UAV's policy after each landing, replayed from the attempt table (docs/delivery-model.md section 8).
 
     Returns, per UAV, a list of (time it took effect, coef, intercept), from t = 0.
     """

@@ -1,4 +1,4 @@
-"""The UAV delivery scenario (MODEL.md, EXPERIMENTS.md Figures 16-20): a fleet of UAVs
+"""The UAV delivery scenario (docs/delivery-model.md, docs/delivery-experiments.md Figures 16-20): a fleet of UAVs
 bids for orders, flies them and recharges; each UAV's policy learns which attempts succeed.
 
 ``scenario`` (the :mod:`dronefleet.scenarios` adaptor), ``simulation`` (one run),

@@ -1,4 +1,4 @@
-"""Tidy tables for the study's figures (EXPERIMENTS.md, Figures 16-20), from the runs' tables.
+"""Tidy tables for the study's figures (docs/delivery-experiments.md, Figures 16-20), from the runs' tables.
 
 Every function takes pandas DataFrames as read from a sweep's parquet datasets
 (``pd.read_parquet("results/<sweep>/<table>")``: the run table's own columns plus the
@@ -273,7 +273,7 @@ def threshold_table(outcomes):
     """Figure 19's table: every threshold(theta) over all tau and seeds, and the best theta.
 
     The best theta is the study's: the most deliveries and the shortest delivery times
-    (EXPERIMENTS.md, Figure 19), both read as medians over a theta's runs, the centres of
+    (docs/delivery-experiments.md, Figure 19), both read as medians over a theta's runs, the centres of
     Figure 19a's boxes (the delivery time of a run is already a median, and a mean of
     medians would mix the two). Each theta is ranked on both measures (1 = most delivered
     parcels, 1 = shortest delivery time; equal values share the better rank) and the lowest

@@ -1,4 +1,4 @@
-"""Winner rules: who bids, with what score, in an auction (MODEL.md section 7).
+"""Winner rules: who bids, with what score, in an auction (docs/delivery-model.md section 7).
 
 A rule is one compiled function with the signature::
 
@@ -43,7 +43,7 @@ serves every plugin, and calls the plugin through a pointer (no inlining). Each 
 compiles the plugin itself once unless it is ``cache=True``. :func:`resolve_rule` loads
 and checks a rule by name. Plugins cannot be ``base_rule`` of ``reservation``.
 
-``reservation`` (MODEL.md section 9) is not a kernel of this kind: it lets a base rule
+``reservation`` (docs/delivery-model.md section 9) is not a kernel of this kind: it lets a base rule
 (config ``base_rule``) resolve the immediate bids and adds reservation bids, whose
 forecast is :func:`reservation_wait`; the engine runs the two phases.
 """

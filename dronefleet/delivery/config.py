@@ -1,7 +1,7 @@
 """The delivery scenario's configuration: every parameter of the model, declared once, validated once.
 
 Each parameter is one field of the frozen dataclass :class:`Config`, declared
-with its TOML section, type, default (the ``MODEL.md`` value), allowed range and
+with its TOML section, type, default (the ``docs/delivery-model.md`` value), allowed range and
 a one-line doc with units (``PARAMETERS[name]`` holds that declaration). Rules
 that involve several parameters are all in :data:`_ORDERED_PAIRS` and
 :data:`RUN_LIMITS` (the size of the run: orders, samples, ticks, ...).
@@ -538,7 +538,7 @@ def _build(flat: Mapping[str, Any], origin: Mapping[str, str]) -> Config:
 
 
 def default_config() -> Config:
-    """The ``MODEL.md`` defaults (= ``configs/paper.toml``)."""
+    """The ``docs/delivery-model.md`` defaults (= ``configs/paper.toml``)."""
     return Config()
 
 

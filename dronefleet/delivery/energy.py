@@ -1,4 +1,4 @@
-"""Closed-form energy of the fleet's multirotors (MODEL.md sections 2 and 3).
+"""Closed-form energy of the fleet's multirotors (docs/delivery-model.md sections 2 and 3).
 
 Every state of charge (SoC, percent) is an exact expression of time: it falls
 linearly in flight and approaches 100 exponentially while charging at the
@@ -52,7 +52,7 @@ def soc_after_charging(soc0, seconds, k):
 
 @njit(cache=True)
 def plan_attempt(soc0, distance_m, speed_m_s, rate_loaded, rate_empty, xi):
-    """The whole timeline of one delivery attempt, known at takeoff (MODEL.md section 3).
+    """The whole timeline of one delivery attempt, known at takeoff (docs/delivery-model.md section 3).
 
     Parameters
     ----------
@@ -104,7 +104,7 @@ def plan_attempt(soc0, distance_m, speed_m_s, rate_loaded, rate_empty, xi):
 
 
 def capable(distance_m, mass_kg, soc, drain, power_loaded, power_empty, speed_m_s, xi):
-    """Ground truth of MODEL.md section 3: can a UAV complete (d, m) from ``soc``?
+    """Ground truth of docs/delivery-model.md section 3: can a UAV complete (d, m) from ``soc``?
 
     ``drain`` is the UAV's :func:`drain_per_watt`; ``power_loaded`` the flight power with
     the parcel. All arguments broadcast; returns a boolean array.

@@ -1,7 +1,7 @@
 """The compiled discrete-event core.
 
 Time jumps from event to event. Each source says when its next event is and the
-earliest is processed; at equal times the order is fixed (MODEL.md leaves it open):
+earliest is processed; at equal times the order is fixed (docs/delivery-model.md leaves it open):
 
 1. UAV events (delivery or abort instant, landing, loss), lowest UAV id first;
 2. an order arrival;
@@ -86,7 +86,7 @@ class Params(NamedTuple):
     record_interval_s: float
     rule: int               # code of the winner rule (auction.RULES); under reservation, the base rule's
     bids_on: int            # BIDS_ON_* of the winner rule
-    reserves: bool          # reservation bids (MODEL.md section 9) when nobody bids immediately
+    reserves: bool          # reservation bids (docs/delivery-model.md section 9) when nobody bids immediately
 
 
 class OrderBook(NamedTuple):

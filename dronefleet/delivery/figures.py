@@ -1,4 +1,4 @@
-"""The study's figures (EXPERIMENTS.md, Figures 16-20) as PNG, PDF and SVG files, from tidy tables alone.
+"""The study's figures (docs/delivery-experiments.md, Figures 16-20) as PNG, PDF and SVG files, from tidy tables alone.
 
 Each function takes a table of :mod:`dronefleet.delivery.analysis` (as stored in parquet under
 ``results/<figure>/``), draws one figure and writes it to ``path`` in each format of

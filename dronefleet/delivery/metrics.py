@@ -1,4 +1,4 @@
-"""The study's metrics (MODEL.md section 11), vectorised over a run's arrays."""
+"""The study's metrics (docs/delivery-model.md section 11), vectorised over a run's arrays."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""The stream of orders arriving at the fulfilment centre (MODEL.md section 1)."""
+"""The stream of orders arriving at the fulfilment centre (docs/delivery-model.md section 1)."""
 
 from typing import NamedTuple
 

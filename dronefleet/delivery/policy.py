@@ -1,4 +1,4 @@
-"""Linear bidding policy of each UAV and its online learner (MODEL.md sections 6 and 8).
+"""Linear bidding policy of each UAV and its online learner (docs/delivery-model.md sections 6 and 8).
 
 Every UAV owns a linear classifier identical to scikit-learn's
 ``SGDClassifier(loss="modified_huber", penalty="l2", alpha=0.01,
@@ -179,7 +179,7 @@ def standardise(X, mean, std):
 
 
 def initial_fit(n_uavs, mean, std, distance_range, mass_range, alpha, epochs, rngs):
-    """Initial fit of every UAV on the two assumed points (MODEL.md section 8).
+    """Initial fit of every UAV on the two assumed points (docs/delivery-model.md section 8).
 
     From ``w = 0``, ``b = 0``, ``t = 1``, ``epochs`` epochs over the points
     ``([d_min, m_min, 100], 1)`` and ``([d_max, m_max, 0], 0)``, each epoch's order

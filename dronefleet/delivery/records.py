@@ -1,4 +1,4 @@
-"""A delivery run's tables (MODEL.md section 10) and its metrics (section 11), written and
+"""A delivery run's tables (docs/delivery-model.md section 10) and its metrics (section 11), written and
 read back through the shared :mod:`dronefleet.records`.
 
 Schemas (times in seconds from the start of the run, SoC in percent, null = did not happen

@@ -46,7 +46,7 @@ class RunState:
 
 @dataclass
 class RunResult:
-    """What a run recorded (MODEL.md section 10), as numpy arrays; ``records`` turns it into tables.
+    """What a run recorded (docs/delivery-model.md section 10), as numpy arrays; ``records`` turns it into tables.
 
     ``snapshots`` holds one dict of fleet arrays per week end (and at the horizon);
     ``period`` is 1 for a new fleet, the saved fleet's period plus one for a warm start;

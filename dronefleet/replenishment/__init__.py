@@ -1,4 +1,4 @@
-"""The energy-replenishment scenario (REPLENISHMENT.md): workers shuttle between a
+"""The energy-replenishment scenario (docs/replenishment-model.md): workers shuttle between a
 base and a work area and recharge at fixed chargers or from mobile chargers.
 
 ``Params`` (parameters and validation), ``simulate`` (all trials of one

@@ -1,4 +1,4 @@
-"""Analytic upper bounds of work and efficiency (REPLENISHMENT.md section 9).
+"""Analytic upper bounds of work and efficiency (docs/replenishment-model.md section 9).
 
 The paper's Eqs 1-3 in per-tick units: a fixed-charger bound (workers commute
 1.0 m each way at full speed) and a constant-supply bound for the mobile

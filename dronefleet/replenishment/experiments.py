@@ -1,4 +1,4 @@
-"""The replenishment study's experiment grids (REPLENISHMENT.md section 10) and running them.
+"""The replenishment study's experiment grids (docs/replenishment-model.md section 10) and running them.
 
 The grids live in ``configs/sweeps/replenishment-figNN.toml`` (the one source of truth), sweep
 files read by :func:`dronefleet.sweep.load_sweep` like any other: ``[set]`` holds the values

@@ -1,4 +1,4 @@
-"""The replenishment study's figures (REPLENISHMENT.md section 10, Figs 9-12) from tidy tables alone.
+"""The replenishment study's figures (docs/replenishment-model.md section 10, Figs 9-12) from tidy tables alone.
 
 Each function reads the tables :mod:`dronefleet.replenishment.experiments` writes (one
 row per trial; one row of bounds per configuration) and draws one figure, as PNG, PDF and

@@ -1,7 +1,7 @@
 """Compiled kernel of the energy-replenishment model, vectorised over trials.
 
 One call advances every trial of one configuration through all ticks
-(REPLENISHMENT.md sections 4-7, in the tick order of section 6). State is a
+(docs/replenishment-model.md sections 4-7, in the tick order of section 6). State is a
 structure of arrays indexed ``[trial, robot]``; robots are the workers
 (indices ``0 .. n_w - 1``) then the mobile chargers (``n_w .. n_w + n_m - 1``).
 Trials never read each other's state, and each has its own random streams, so

@@ -1,4 +1,4 @@
-"""Parameters of the energy-replenishment model (REPLENISHMENT.md section 2).
+"""Parameters of the energy-replenishment model (docs/replenishment-model.md section 2).
 
 A plain frozen dataclass with the spec's defaults and one :meth:`Params.validate`
 that checks every field and every rule between fields; kernels never re-check.

@@ -30,7 +30,7 @@ Tables (:func:`simulate`): ``summary``, one row per trial (the columns of
 per trial and sampled tick: ``trial``, ``tick``, robots per controller phase
 (``workers_charging``, ``workers_to_work``, ``workers_working``,
 ``workers_to_charge``, ``chargers_charging``, ``chargers_to_transfer``,
-``chargers_sharing``, ``chargers_to_base``: phases P0..P3 of spec section 5.1),
+``chargers_sharing``, ``chargers_to_base``: phases P0..P3 of docs/replenishment-model.md section 5.1),
 ``stored_energy`` (sum of batteries) and ``work`` (cumulative points). Both carry
 the config (JSON) in their metadata.
 """

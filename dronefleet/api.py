@@ -4,7 +4,7 @@ Both are exported at the package top level (``dronefleet.run``, ``dronefleet.swe
 through the scenario contract (:mod:`dronefleet.scenarios`) and the machinery of the command
 line: :func:`run` is ``dronefleet run`` (its :meth:`Run.save` writes the same bytes as
 ``dronefleet run --out``), :func:`sweep` is a sweep file planned, run and collected by
-:mod:`dronefleet.sweep`, built from the arguments instead of a TOML file.
+:mod:`dronefleet.sweeps`, built from the arguments instead of a TOML file.
 
 Configs and changes are given as on the command line. ``config`` (``base`` of a sweep) is
 None (the paper's delivery scenario), a registered scenario's name (its defaults:
@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 from . import scenarios
 from .config import ConfigError, _show
 from .scenarios import Scenario
-from .sweep import available_cpus, collect, run_sweep, sweep_of_document
+from .sweeps import available_cpus, collect, run_sweep, sweep_of_document
 
 if TYPE_CHECKING:
     import pandas
@@ -246,7 +246,7 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     """Run every configuration of ``grid`` times ``seeds``; return their summaries, one table.
 
     The sweep a sweep file with these ``[grid]``, ``[set]``, ``seeds`` and ``base`` would
-    be (see :mod:`dronefleet.sweep`), planned, run and collected in a temporary folder that
+    be (see :mod:`dronefleet.sweeps`), planned, run and collected in a temporary folder that
     is removed afterwards: every run's config is validated before the first one starts.
 
     Parameters
@@ -276,7 +276,7 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
 
     Raises
     ------
-    dronefleet.sweep.SweepError
+    dronefleet.sweeps.SweepError
         (a ConfigError, a ValueError) Bad arguments: an unknown key, an empty grid, a value
         given twice, a key both in ``grid`` and ``set``, missing or repeated seeds, any
         value the scenario refuses (the message names the key, the grid point and what is

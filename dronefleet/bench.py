@@ -18,7 +18,7 @@ import time
 
 def bench_reproduce(argv):
     """Wall time and peak memory of ``dronefleet reproduce all`` run from scratch into a temporary folder."""
-    from .sweep import available_cpus
+    from .sweeps import available_cpus
 
     parser = argparse.ArgumentParser(prog="python -m dronefleet.bench reproduce")
     parser.add_argument("--jobs", type=int, help="local processes (default: all CPUs)")

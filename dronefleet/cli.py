@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-from . import console, provenance, scenarios, sweep
+from . import console, provenance, scenarios, sweeps
 from .config import ConfigError
 from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, probe_folders, writing
@@ -308,10 +308,10 @@ def _at_least(least):
 
 
 def _add_sweep_commands(commands):
-    """``dronefleet sweep plan|run|status|collect SWEEP``; the handlers are in :mod:`dronefleet.sweep`."""
-    sweeps = commands.add_parser("sweep", help="parameter sweeps: plan a job array, run, status, collect",
+    """``dronefleet sweep plan|run|status|collect SWEEP``; the handlers are in :mod:`dronefleet.sweeps`."""
+    parser = commands.add_parser("sweep", help="parameter sweeps: plan a job array, run, status, collect",
                                  description="Grids of conditions times seeds; see the README, section Sweeps.")
-    actions = sweeps.add_subparsers(dest="action", required=True)
+    actions = parser.add_subparsers(dest="action", required=True)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/rules.toml")
     common.add_argument("--results", default="results", metavar="DIR",
@@ -321,7 +321,7 @@ def _add_sweep_commands(commands):
     p.add_argument("--time", help="#SBATCH --time of each task, e.g. 00:30:00")
     p.add_argument("--partition", help="#SBATCH --partition")
     p.add_argument("--account", help="#SBATCH --account")
-    p.set_defaults(func=sweep.plan_command)
+    p.set_defaults(func=sweeps.plan_command)
     p = actions.add_parser("run", parents=[common], help="run one task's runs, or all runs; skip those done")
     p.add_argument("--task-id", type=_at_least(0), metavar="N",
                    help="run job-array task N (0-based); default: from SLURM_ARRAY_TASK_ID, PBS_ARRAY_INDEX, "
@@ -331,12 +331,12 @@ def _add_sweep_commands(commands):
     p.add_argument("--executor", choices=("local", "dask"), default="local",
                    help="local processes (default) or a Dask cluster (needs --scheduler)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, e.g. tcp://10.0.0.1:8786")
-    p.set_defaults(func=sweep.run_command)
+    p.set_defaults(func=sweeps.run_command)
     p = actions.add_parser("status", parents=[common], help="done, missing and failed runs (with their errors)")
-    p.set_defaults(func=sweep.status_command)
+    p.set_defaults(func=sweeps.status_command)
     p = actions.add_parser("collect", parents=[common],
                            help="one summary table, a row per run, as DIR/<name>/collected.parquet")
-    p.set_defaults(func=sweep.collect_command)
+    p.set_defaults(func=sweeps.collect_command)
 
 
 def _add_reproduce_command(commands, arguments):

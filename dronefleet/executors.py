@@ -18,7 +18,7 @@ from collections import deque
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
-from .sweep import SweepError
+from .sweeps import SweepError
 
 #: ``prctl`` option: the signal the kernel sends this process when its parent dies (linux/prctl.h).
 _PR_SET_PDEATHSIG = 1

@@ -1,7 +1,7 @@
 """Output paths checked before any work: folders that cannot take a run's files are refused in
 one line (:class:`OutputError`), and an OSError while writing becomes such a line too.
 
-Shared by ``dronefleet run`` (:mod:`dronefleet.cli`) and the sweeps (:mod:`dronefleet.sweep`);
+Shared by ``dronefleet run`` (:mod:`dronefleet.cli`) and the sweeps (:mod:`dronefleet.sweeps`);
 standard library only, so the command line stays quick to start.
 """
 

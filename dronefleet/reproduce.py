@@ -19,7 +19,7 @@ Everything is written under one results root, ``<out>``: ``--out DIR``, by defau
 :data:`DEFAULT_OUT` (``dronefleet-results/`` in the working directory), never the committed
 ``results/`` unless ``--update-results`` names it (:data:`COMMITTED_RESULTS`, the
 repository's ``results/``: run from the repository's root). Sweeps run through
-:mod:`dronefleet.sweep` into ``<out>/<sweep>/`` (runs already there are reused, so figures
+:mod:`dronefleet.sweeps` into ``<out>/<sweep>/`` (runs already there are reused, so figures
 sharing a sweep run it once, and ``dronefleet sweep run --results <out>`` or a SLURM job
 array can fill it beforehand). Each figure then writes its tidy tables to
 ``<out>/<figure>/*.parquet`` and draws its files (PNG, PDF and SVG,
@@ -55,7 +55,7 @@ from .delivery import analysis
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
-from .sweep import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
+from .sweeps import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
 
 log = logging.getLogger("dronefleet.reproduce")  # not __name__: it also runs as __main__
 

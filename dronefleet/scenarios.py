@@ -1,6 +1,6 @@
 """The scenarios dronefleet simulates, registered once by name, and the contract each implements.
 
-The CLI, the sweeps (:mod:`dronefleet.sweep`: plan, run on local processes, a job array or
+The CLI, the sweeps (:mod:`dronefleet.sweeps`: plan, run on local processes, a job array or
 Dask, status, collect) and ``reproduce`` work on this contract, never on a concrete scenario
 (``dronefleet run`` keeps a delivery-only path for fleet files and the progress bar). A config file names its scenario
 with a top-level ``scenario = "<name>"``; a file without the key is a delivery config, so

@@ -138,11 +138,11 @@ def test_bad_arguments_are_one_line_value_errors_before_any_work(call, message):
     assert isinstance(refused.value, ValueError) and "\n" not in str(refused.value)
 
 
-def test_dronefleet_sweep_is_both_the_function_and_the_machinerys_module():
-    from dronefleet import sweep as machinery
+def test_dronefleet_sweep_is_the_api_function_whatever_is_imported_after():
+    import dronefleet.sweeps  # the machinery has a name of its own, which cannot rebind dronefleet.sweep
+    from dronefleet import api, sweep
 
-    assert machinery is sys.modules["dronefleet.sweep"] and callable(machinery)
-    assert machinery.load_sweep is dronefleet.sweep.load_sweep
+    assert sweep is api.sweep and dronefleet.sweep is api.sweep
 
 
 _PROBE = """

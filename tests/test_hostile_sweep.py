@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from dronefleet import cli, executors, sweep as sw
+from dronefleet import cli, executors, sweeps as sw
 from dronefleet.delivery import simulation
 
 ROOT = Path(__file__).resolve().parents[1]

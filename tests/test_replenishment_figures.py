@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dronefleet import cli, figstyle, reproduce, sweep
+from dronefleet import cli, figstyle, reproduce, sweeps
 from dronefleet.replenishment import Params, bounds, experiments, study
 from dronefleet.replenishment import figures as rfigures
 
@@ -22,7 +22,7 @@ TINY_TRIALS, TINY_TICKS = 2, 300
 
 def grid(figure, changes=None):
     """The configurations (Params) of the figure's sweep file, in run order."""
-    return [run.config.params for run in sweep.load_sweep(experiments.grid_path(figure), changes).runs]
+    return [run.config.params for run in sweeps.load_sweep(experiments.grid_path(figure), changes).runs]
 
 
 def points(configs, *columns):
@@ -65,11 +65,11 @@ def test_a_grid_file_with_an_unknown_key_or_a_refused_value_names_it(tmp_path):
     path = tmp_path / "g.toml"
     head = '[sweep]\nscenario = "replenishment"\n[set]\ntrials = 2\n[[grid]]\nstrategy = ["mobile"]\nn_chargers = [2]\n'
     path.write_text(head + 'work_rate = [1.0]\n')
-    with pytest.raises(sweep.SweepError, match="unknown key 'work_rate'"):
-        sweep.load_sweep(path)
+    with pytest.raises(sweeps.SweepError, match="unknown key 'work_rate'"):
+        sweeps.load_sweep(path)
     path.write_text(head + 'transfer_loss = [0.5, 1.0]\n')
-    with pytest.raises(sweep.SweepError, match=r"transfer_loss = 1\.0.*\[0, 1\)"):
-        sweep.load_sweep(path)
+    with pytest.raises(sweeps.SweepError, match=r"transfer_loss = 1\.0.*\[0, 1\)"):
+        sweeps.load_sweep(path)
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from dronefleet import cli, reproduce, sweep
+from dronefleet import cli, reproduce, sweeps
 from dronefleet.delivery import analysis, simulation, records as delivery_records
 from dronefleet.delivery.fleet import seeded_path
 
@@ -170,7 +170,7 @@ def test_quick_sweeps_are_the_study_sweeps_with_fewer_seeds_and_weeks(tmp_path):
         assert q.grid == f.grid and q.seeds == reproduce.QUICK_SEEDS and len(f.seeds) == 20
         assert {r.config.horizon_weeks for r in q.runs} == {2.0} and {r.config.horizon_weeks for r in f.runs} == {8.0}
     assert len(full.sweep("rules").runs) == 360 and len(full.sweep("thresholds").runs) == 720
-    assert isinstance(study.sweep("rules"), sweep.Sweep)
+    assert isinstance(study.sweep("rules"), sweeps.Sweep)
 
 
 def test_without_matplotlib_nothing_runs(tmp_path, monkeypatch, capsys):

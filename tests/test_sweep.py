@@ -1,4 +1,4 @@
-"""Parameter sweeps (dronefleet.sweep): sweep files, tasks, the dataset, resumption, failures, Dask."""
+"""Parameter sweeps (dronefleet.sweeps): sweep files, tasks, the dataset, resumption, failures, Dask."""
 
 import io
 import json
@@ -22,7 +22,7 @@ import pyarrow.dataset as ds
 import pyarrow.parquet as pq
 import pytest
 
-from dronefleet import cli, console, scenarios, sweep as sw
+from dronefleet import cli, console, scenarios, sweeps as sw
 from dronefleet.delivery import simulation
 from dronefleet.delivery.config import default_config, replace
 from dronefleet.delivery.records import TABLES

@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from conftest import TINY_SWEEPS as TINY
-from dronefleet import cli, scenarios, sweep as sw
+from dronefleet import cli, scenarios, sweeps as sw
 
 ARROW_TYPES = {float: pa.float64(), int: pa.int64(), str: pa.string()}
 

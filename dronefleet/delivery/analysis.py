@@ -7,7 +7,7 @@ identified by its grid keys (the ``by`` argument) and its seed.
 
 Grid keys read by ``pd.read_parquet`` from hive-partitioned directories come back as
 categoricals, and a float key such as ``tau_minutes=15.0`` as the strings ``"15.0"``
-(``dronefleet.sweep.dataset`` types them); every function returns them as plain values
+(``dronefleet.sweeps.dataset`` types them); every function returns them as plain values
 (numbers where every value is one) so that they sort and plot as numbers.
 
 Units are those of ``dronefleet.records``: seconds, metres, kilograms, SoC in percent.

@@ -175,7 +175,7 @@ def _bench(args, compile_s):
 
 def bench_sweep(path, jobs, compile_s):
     """Run every run of the sweep file ``path`` on ``jobs`` processes into a temporary directory; print the times."""
-    from ..sweep import available_cpus, load_sweep, run_sweep
+    from ..sweeps import available_cpus, load_sweep, run_sweep
 
     sweep = load_sweep(path)
     jobs = jobs or available_cpus()

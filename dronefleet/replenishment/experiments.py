@@ -1,7 +1,7 @@
 """The replenishment study's experiment grids (docs/replenishment-model.md section 10) and running them.
 
 The grids live in ``configs/sweeps/replenishment-figNN.toml`` (the one source of truth), sweep
-files read by :func:`dronefleet.sweep.load_sweep` like any other: ``[set]`` holds the values
+files read by :func:`dronefleet.sweeps.load_sweep` like any other: ``[set]`` holds the values
 every configuration shares (``trials`` among them), and each ``[[grid]]`` table one cartesian
 product of lists; the configurations are the union of the products, in file order, each a
 run holding all its trials. Everything not named keeps the default of
@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import shipped_config
-from ..sweep import SweepError
+from ..sweeps import SweepError
 from .bounds import BoundUndefinedError, bounds
 from .params import Params
 

@@ -19,7 +19,7 @@ parameters are checked in one place, :meth:`Params.validate`; this module adds
 only ``first_trial`` (trial k uses seed 876 k, so any slice of trials can run
 alone). ``--set key=value`` takes ``section.key`` or the bare key.
 
-A run holds all its trials, so in a sweep (:mod:`dronefleet.sweep`) a configuration is one
+A run holds all its trials, so in a sweep (:mod:`dronefleet.sweeps`) a configuration is one
 run: its seed key is ``first_trial``, and ``[sweep] seeds`` are optional first trials of
 blocks of ``trials`` trials (``seeds = [1, 51]`` with ``trials = 50``: trials 1-100 in two
 runs per configuration, which can be added later without redoing the first 50; blocks that

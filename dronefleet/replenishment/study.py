@@ -1,7 +1,7 @@
 """``dronefleet reproduce fig09..fig12``: the replenishment figures' tables, drawings and check.
 
 Called by :mod:`dronefleet.reproduce` for the figures of :data:`experiments.FIGURES`. Each
-figure runs its whole grid (its sweep file, read by :func:`dronefleet.sweep.load_sweep`;
+figure runs its whole grid (its sweep file, read by :func:`dronefleet.sweeps.load_sweep`;
 seconds, so nothing is reused)
 and writes under ``<out>/<figure>/``: ``runs.parquet`` (one row per trial: configuration,
 trial, seed, metrics) and ``bounds.parquet`` (one row per configuration), then draws its
@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from ..sweep import SweepError, load_sweep
+from ..sweeps import SweepError, load_sweep
 from . import experiments
 from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
 from .params import Params

@@ -1,7 +1,7 @@
 """Parameter sweeps: a grid of config values times seeds, one hive-partitioned dataset, for any scenario.
 
-Called, this module is :func:`dronefleet.api.sweep`: ``dronefleet.sweep(grid, seeds=...)`` runs
-a sweep from Python, without a file, and returns its summaries as a pandas DataFrame.
+From Python, ``dronefleet.sweep(grid, seeds=...)`` (:func:`dronefleet.api.sweep`) runs a sweep
+without a file and returns its summaries as a pandas DataFrame.
 
 A sweep file is TOML (``configs/sweeps/``). A delivery sweep::
 
@@ -783,7 +783,7 @@ def collect(sweep: Sweep, out: Path):
     key), then its summary (delivery: one row per run; replenishment: one row per trial).
 
     Written atomically to ``out/collected.parquet``, with the sweep file in the metadata
-    (``dronefleet.sweep``). Returns ``(table, the runs not done)``.
+    (key ``dronefleet.sweep``). Returns ``(table, the runs not done)``.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq

@@ -22,7 +22,8 @@ import stat
 import tomllib
 from os import PathLike
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any
+from collections.abc import Callable, Iterable
 
 __all__ = ["ConfigError", "MAX_CONFIG_BYTES", "SCENARIO_KEY", "read_toml", "shipped_config"]
 

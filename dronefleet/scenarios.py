@@ -73,7 +73,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from importlib import resources
 from types import ModuleType
-from typing import Callable
+from collections.abc import Callable
 
 from .config import SCENARIO_KEY, ConfigError, _show, _suggest, read_toml
 

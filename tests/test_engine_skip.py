@@ -4,6 +4,7 @@ Each bound the skip relies on must hold for every input, not only along one mach
 trajectory: the inputs are drawn in the test, the expected answers found by scanning.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -14,6 +15,11 @@ from dronefleet.delivery.energy import soc_after_charging
 from dronefleet.fpmath import log
 
 THETAS = [100.0, np.nextafter(100.0, 0.0), 99.99, 90.0, 80.0, 64.0, 50.0, 33.3, 0.5]
+
+
+def _bids_at_tick(tick, soc0, interval, t_ref, k, theta):
+    """Whether a UAV charging from ``soc0`` at ``t_ref`` meets ``theta`` at advertisement ``tick``."""
+    return soc_after_charging(soc0, tick * interval - t_ref, k) >= theta
 
 
 @pytest.mark.parametrize("theta", THETAS)
@@ -29,8 +35,7 @@ def test_threshold_crossing_is_a_tight_lower_bound(theta):
         crossing = t_ref + log((100.0 - soc0) / gap) / k
         first = engine.first_tick_at_or_after(crossing, interval)
         # Brute force: the computed SoC, exactly as an auction evaluates it, tick by tick.
-        def bids(tick):
-            return soc_after_charging(soc0, tick * interval - t_ref, k) >= theta
+        bids = functools.partial(_bids_at_tick, soc0=soc0, interval=interval, t_ref=t_ref, k=k, theta=theta)
         start = max(engine.first_tick_at_or_after(t_ref, interval), first - 50)
         for tick in range(start, first):
             assert not bids(tick), (theta, soc0, k, tick, first)

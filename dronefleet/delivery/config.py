@@ -48,7 +48,8 @@ import json
 import math
 from dataclasses import dataclass, field
 from os import PathLike
-from typing import Any, Iterable, Mapping
+from typing import Any
+from collections.abc import Iterable, Mapping
 
 from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
 

@@ -122,7 +122,8 @@ def work_and_efficiency(runs, bounds, path, x, xlabel, efficiency="efficiency", 
                                label=f"{LABELS.get(strategy, strategy)}: bound")
                     continue
                 dodge = _dodge(s, len(strategy_styles), 1.5 * _SPREAD)
-                shift = (lambda v: v * 10.0 ** (dodge * span)) if log_x else (lambda v: v + dodge * span)
+                offset = dodge * span
+                shift = (lambda v, d=offset: v * 10.0 ** d) if log_x else (lambda v, d=offset: v + d)
                 for value, group in mine.groupby(x):
                     n = len(group)
                     xs = [_spread(shift(value), k, n, log_x, span) for k in range(n)]

@@ -106,11 +106,11 @@ class Params:
     def mobile(self) -> bool:
         return self.strategy == "mobile"
 
-    def replace(self, **changes) -> "Params":
+    def replace(self, **changes) -> Params:
         """A validated copy with ``changes`` applied."""
         return dataclasses.replace(self, **changes).validate()
 
-    def validate(self) -> "Params":
+    def validate(self) -> Params:
         """Check every field and the rules between them; return self.
 
         Raises

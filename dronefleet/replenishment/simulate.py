@@ -31,7 +31,7 @@ TRACE_NAMES = ("x", "y", "energy", "consumed", "flags", "event", "sup_states", "
                "served", "msg_requesting", "msg_from", "msg_to", "received", "source")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _default_supervisor(name):
     """The 2024 supervisor file ``name`` of SUPERVISOR_FILES, parsed once per process.
 

@@ -1,12 +1,11 @@
 """Figure style shared by every scenario's figures: matplotlib loaded on demand, one figure
 on the Agg canvas in the project's style, saved reproducibly as PNG, PDF and SVG.
 
-matplotlib is an optional dependency (``pip install 'dronefleet[plots]'``), imported
-only when a figure is drawn. Figures are ``matplotlib.figure.Figure`` objects on the Agg
-canvas, never pyplot, so nothing stays registered in pyplot's global state; they are
-drawn under matplotlib's default style plus :data:`RC`, whatever the user's matplotlibrc,
-and saved without dates or software versions, so the same table gives the same bytes in
-every format.
+matplotlib is imported only when a figure is drawn, so a run never loads it. Figures are
+``matplotlib.figure.Figure`` objects on the Agg canvas, never pyplot, so nothing stays
+registered in pyplot's global state; they are drawn under matplotlib's default style plus
+:data:`RC`, whatever the user's matplotlibrc, and saved without dates or software versions,
+so the same table gives the same bytes in every format.
 
 Each winner rule and each replenishment strategy has one :class:`Style` in every figure:
 the study's colours (least_confident green, most_confident pink, random orange) from the
@@ -86,7 +85,8 @@ def require_matplotlib():
         import matplotlib.style
         import matplotlib.ticker
     except ImportError as error:
-        raise ImportError("drawing figures needs matplotlib: pip install 'dronefleet[plots]'") from error
+        raise ImportError("drawing figures needs matplotlib, a dependency of dronefleet: "
+                          "pip install matplotlib") from error
     return matplotlib
 
 

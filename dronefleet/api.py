@@ -98,7 +98,7 @@ class Run:
         The tables as the simulation made them, which :meth:`save` writes.
     """
 
-    def __init__(self, scenario: Scenario, config: Any, arrow: dict[str, pyarrow.Table]):
+    def __init__(self, scenario: Scenario, config: Any, arrow: dict[str, pyarrow.Table]) -> None:
         self.scenario, self.config, self.arrow = scenario, config, arrow
         self._frames: dict[str, pandas.DataFrame] = {}
 

@@ -11,7 +11,9 @@ import logging
 import os
 import sys
 import time
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from . import console, provenance, scenarios, sweeps
 from .config import ConfigError
@@ -49,7 +51,7 @@ def format_summary(m: dict, wall_s: float | None = None) -> str:
     return "\n".join(f"  {label:<22}{value}" for label, value in lines)
 
 
-def default_out(name: str, config, tag: str | None = None) -> Path:
+def default_out(name: str, config: Any, tag: str | None = None) -> Path:
     """``results/runs/<name>-<tag>-<8 hex>`` (``tag`` by default ``seed<N>``): the hex digits start
     the SHA-256 of the resolved config's JSON, so runs of different configs (``--set``, ``--fleet``)
     never share a folder."""
@@ -57,7 +59,7 @@ def default_out(name: str, config, tag: str | None = None) -> Path:
     return Path("results") / "runs" / f"{name}-{tag or f'seed{config.seed}'}-{digest}"
 
 
-def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables=None) -> None:
+def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: Iterable[str] | None = None) -> None:
     """Refuse, before any work, outputs that the run could not write or would silently replace.
 
     ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder (of the table
@@ -155,7 +157,7 @@ def _write_replay(args, out):
         log.info(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE)}")
 
 
-def replay_command(args):
+def replay_command(args: argparse.Namespace) -> int:
     """``dronefleet replay RUN_DIR [--out FILE.html]``: the run's replay page (:mod:`dronefleet.replay`)."""
     from . import replay
     from .records import REPLAY_FILE

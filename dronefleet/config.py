@@ -39,7 +39,7 @@ class ConfigError(ValueError):
     ``keys`` holds the parameter names involved (possibly empty).
     """
 
-    def __init__(self, message: str, keys: Iterable[str] = ()):
+    def __init__(self, message: str, keys: Iterable[str] = ()) -> None:
         super().__init__(message)
         self.keys = tuple(keys)
 

@@ -15,8 +15,10 @@ import sys
 import threading
 import time
 from collections import deque
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
+from typing import TypeVar
 
 from .sweeps import SweepError
 
@@ -27,6 +29,11 @@ _PARENT_POLL_S = 1.0
 
 #: How long `dask` waits for the scheduler to answer before giving up (s).
 SCHEDULER_TIMEOUT_S = 10.0
+
+Item = TypeVar("Item")
+Result = TypeVar("Result")
+#: What an executor yields per item: ``(item, result, None)`` or ``(item, None, error)``.
+Outcomes = Iterator[tuple[Item, Result | None, BaseException | None]]
 
 
 def _outcome(future):
@@ -65,7 +72,7 @@ def _watch_parent(parent):
     os._exit(1)
 
 
-def local(function, items, jobs):
+def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) -> Outcomes[Item, Result]:
     """``function`` over ``items`` on ``jobs`` processes of this machine.
 
     The first item runs in this process before any worker starts: it compiles the engine
@@ -121,7 +128,8 @@ def local(function, items, jobs):
             pool.shutdown()
 
 
-def dask(function, items, scheduler, keys):
+def dask(function: Callable[[Item], Result], items: Iterable[Item], scheduler: str,
+         keys: Iterable[str]) -> Outcomes[Item, Result]:
     """``function`` over ``items`` on the Dask cluster at ``scheduler``, one task per item.
 
     Connects at once (within :data:`SCHEDULER_TIMEOUT_S`), so that a scheduler that cannot

@@ -16,8 +16,10 @@ too. Figures have no titles: their captions live in ``results/README.md``.
 
 import itertools
 import os
+from collections.abc import Iterable, Mapping
 from contextlib import contextmanager
 from pathlib import Path
+from types import ModuleType
 from typing import NamedTuple
 
 DPI = 150
@@ -64,7 +66,7 @@ RC = {"svg.hashsalt": "dronefleet", "pdf.fonttype": 42,
       "axes.prop_cycle": f"cycler(color={[style.colour for style in RULE_STYLES.values()]!r})"}
 
 
-def styles(names, known):
+def styles(names: Iterable[str], known: Mapping[str, Style]) -> dict[str, Style]:
     """The :class:`Style` of each of ``names`` (one per distinct name, in sorted order).
 
     A name is looked up in ``known`` by its part before any parenthesis (``threshold(80)``
@@ -74,7 +76,7 @@ def styles(names, known):
     return {name: known.get(str(name).partition("(")[0]) or next(others) for name in sorted(set(names))}
 
 
-def require_matplotlib():
+def require_matplotlib() -> ModuleType:
     """The matplotlib package with the submodules used here, or an error that says how to install it."""
     try:
         import matplotlib
@@ -90,7 +92,7 @@ def require_matplotlib():
     return matplotlib
 
 
-def figure_paths(path):
+def figure_paths(path: str | os.PathLike) -> list[Path]:
     """The files a figure named ``path`` is written to: its name with each of :data:`FORMATS`."""
     path = Path(path)
     return [path.with_suffix(f".{suffix}") for suffix in FORMATS]

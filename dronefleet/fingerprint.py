@@ -12,13 +12,19 @@ column in order, the line ``name<TAB>type`` (Arrow's type string), then one line
 ``None`` for null; lists as Python lists), all UTF-8, each line ending in ``\\n``.
 """
 
+from __future__ import annotations
+
 import hashlib
 import json
 import sys
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from .delivery.config import default_config, replace
+from .delivery.config import Config, default_config, replace
+
+if TYPE_CHECKING:
+    import pyarrow
 
 #: Name -> config changes of the fingerprinted runs (seed 0, 25 UAVs, one week, tau 15 min).
 RUNS = {
@@ -32,7 +38,7 @@ RUNS = {
 WARM_FROM = "least_confident"
 
 
-def table_digest(table):
+def table_digest(table: pyarrow.Table) -> str:
     """SHA-256 (hex) of a pyarrow table's column names, types and values, metadata aside."""
     digest = hashlib.sha256()
     for name, column in zip(table.column_names, table.columns):
@@ -42,12 +48,12 @@ def table_digest(table):
     return digest.hexdigest()
 
 
-def run_config(name):
+def run_config(name: str) -> Config:
     """The config of fingerprinted run ``name`` (a key of :data:`RUNS`)."""
     return replace(default_config(), horizon_weeks=1.0, **RUNS[name])
 
 
-def fingerprints():
+def fingerprints() -> dict[str, dict[str, str]]:
     """{run name: {table name: SHA-256}} of every run of :data:`RUNS` and of ``"warm_start"``."""
     from .delivery.fleet import save_fleet
     from .delivery.records import tables
@@ -65,7 +71,7 @@ def fingerprints():
     return out
 
 
-def main():
+def main() -> None:
     json.dump(fingerprints(), sys.stdout, indent=4, sort_keys=True)
     print()
 

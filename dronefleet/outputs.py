@@ -8,7 +8,9 @@ standard library only, so the command line stays quick to start.
 import errno
 import os
 import tempfile
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager, suppress
+from pathlib import Path
 
 from .config import ConfigError
 
@@ -18,7 +20,7 @@ class OutputError(ConfigError):
 
 
 @contextmanager
-def writing(path):
+def writing(path: str | os.PathLike) -> Iterator[None]:
     """Turn an OSError while writing ``path`` (disk full, read-only, ...) into a one-line OutputError."""
     try:
         yield
@@ -26,7 +28,7 @@ def writing(path):
         raise OutputError(f"cannot write {str(path)!r}: {error.strerror or error}") from None
 
 
-def probe_folders(folders):
+def probe_folders(folders: Iterable[Path]) -> None:
     """Create ``folders`` (and their parents) if needed and check that files can be made in them;
     if one cannot, remove the folders made here and raise OutputError."""
     made = []

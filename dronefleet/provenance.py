@@ -6,6 +6,8 @@ Cheap to import: versions come from the installed distributions' metadata, not b
 the libraries, so ``dronefleet --version`` stays fast.
 """
 
+from __future__ import annotations
+
 import functools
 import json
 import os
@@ -13,8 +15,12 @@ import platform
 import subprocess
 from importlib import metadata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import __version__
+
+if TYPE_CHECKING:
+    import pyarrow
 
 #: Schema metadata key of :func:`provenance` (JSON); ``dronefleet.version`` holds the version alone.
 KEY = b"dronefleet.provenance"
@@ -36,7 +42,7 @@ def _git(source, *args):
     return done.stdout.strip() if done.returncode == 0 else None
 
 
-def commit_of(source):
+def commit_of(source: str | os.PathLike) -> str | None:
     """The commit checked out in the git tree whose top is ``source``, ``-dirty`` if tracked files
     differ from it (``-unknown`` if that cannot be told); None if ``source`` is not the top of a
     checkout, or git is missing, fails or hangs."""
@@ -52,7 +58,7 @@ def commit_of(source):
 
 
 @functools.cache
-def git_commit():
+def git_commit() -> str | None:
     """The commit of the source tree this package runs from (:func:`commit_of` its parent folder):
     an installed wheel has none, even inside some other repository. Looked up once per process."""
     return commit_of(Path(__file__).resolve().parent.parent)
@@ -66,20 +72,20 @@ def _version(distribution):
 
 
 @functools.cache
-def provenance():
+def provenance() -> dict[str, str | None]:
     """``{"dronefleet", "git_commit", "python", "numpy", "numba", "scikit-learn", "pyarrow"}``:
     versions as strings, ``git_commit`` None outside a git checkout. Computed once per process."""
     return {"dronefleet": __version__, "git_commit": git_commit(), "python": platform.python_version(),
             **{name: _version(name) for name in LIBRARIES}}
 
 
-def version_line():
+def version_line() -> str:
     """``dronefleet <version>``, plus `` (commit <sha>)`` when running from a git checkout."""
     commit = git_commit()
     return f"dronefleet {__version__}" + (f" (commit {commit})" if commit else "")
 
 
-def stamp(table):
+def stamp(table: pyarrow.Table) -> pyarrow.Table:
     """``table`` (pyarrow) with :func:`provenance` added to its schema metadata; its data untouched."""
     return table.replace_schema_metadata({**(table.schema.metadata or {}), VERSION_KEY: __version__,
                                           KEY: json.dumps(provenance(), sort_keys=True)})

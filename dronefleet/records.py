@@ -14,7 +14,9 @@ import os
 import re
 import shutil
 import socket
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -28,7 +30,7 @@ CONFIG_KEY = b"dronefleet.config"
 REPLAY_FILE = "replay.html"
 
 
-def arrow_array(values, null=None) -> pa.Array:
+def arrow_array(values: np.ndarray | Sequence, null: np.ndarray | None = None) -> pa.Array:
     """A numpy array (or a list of scalars) as an Arrow array, built from its buffers.
 
     ``pyarrow.array`` imports pandas (0.3-0.4 s, most of a run's start-up) to ask whether its
@@ -59,7 +61,7 @@ def arrow_array(values, null=None) -> pa.Array:
     return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), n, [validity, pa.py_buffer(values)])
 
 
-def arrow_table(columns, metadata=None) -> pa.Table:
+def arrow_table(columns: Mapping[str, np.ndarray | pa.Array], metadata: Mapping | None = None) -> pa.Table:
     """``{name: numpy array or arrow array}`` as a table (see :func:`arrow_array`)."""
     table = pa.table({name: column if isinstance(column, pa.Array) else arrow_array(column)
                       for name, column in columns.items()})
@@ -71,7 +73,7 @@ def _temporary_name(path, kind):
     return path.with_name(f".{path.name}.{socket.gethostname()}-{os.getpid()}.{kind}")
 
 
-def write_atomic(path, write):
+def write_atomic(path: str | os.PathLike, write: Callable[[Path], object]) -> Path:
     """``write(tmp)`` a hidden sibling temporary file, then rename it to ``path``; return ``path``.
 
     A reader never sees a partial file, and an interrupted write leaves only the hidden
@@ -89,13 +91,13 @@ def write_atomic(path, write):
     return path
 
 
-def write_table(table, path, config):
+def write_table(table: pa.Table, path: str | os.PathLike, config: Any) -> Path:
     """Write ``table`` to ``path`` atomically, with the resolved ``config`` and the provenance in its metadata."""
     table = stamp(table.replace_schema_metadata({CONFIG_KEY: config.to_json()}))
     return write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
-def run_dir_state(out_dir, table_names):
+def run_dir_state(out_dir: str | os.PathLike, table_names: Iterable[str]) -> str:
     """What ``out_dir`` holds: ``"absent"``, ``"empty"``, ``"complete"`` (every table ``table_names`` of a run),
     ``"partial"`` (some tables and nothing else: left by a dronefleet before complete-or-absent
     run folders), ``"file"`` (not a folder) or ``"other"`` (files that are not a run's tables).
@@ -116,7 +118,7 @@ def run_dir_state(out_dir, table_names):
     return "complete" if names == tables else "partial"
 
 
-def clean_leftovers(out_dir):
+def clean_leftovers(out_dir: str | os.PathLike) -> None:
     """Remove what interrupted writers of the run folder ``out_dir`` left beside it.
 
     Only this host's leftovers whose process is gone are touched. A killed replacement
@@ -147,7 +149,8 @@ def _alive(pid):
     return True
 
 
-def write_tables(named_tables, out_dir, config, overwrite=False):
+def write_tables(named_tables: Mapping[str, pa.Table], out_dir: str | os.PathLike, config: Any,
+                 overwrite: bool = False) -> dict[str, Path]:
     """Write ``named_tables`` (name -> pyarrow Table) as ``out_dir/<name>.parquet`` with
     ``config`` (anything with ``to_json()``) and the provenance in each file's metadata
     (:func:`write_table`); return the paths. Any scenario's run folder is written here.
@@ -191,6 +194,6 @@ def write_tables(named_tables, out_dir, config, overwrite=False):
     return paths
 
 
-def read_config_dict(path):
+def read_config_dict(path: str | os.PathLike) -> dict[str, Any]:
     """The resolved config embedded in a dronefleet parquet file, as the dict of its JSON."""
     return json.loads(pq.read_schema(path).metadata[CONFIG_KEY])

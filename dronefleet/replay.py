@@ -11,8 +11,10 @@ slider, the counters, an overview chart and ``#t=SECONDS`` (open paused at that 
 
 import json
 import math
+import os
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from . import scenarios
 from .config import SCENARIO_KEY, ConfigError
@@ -24,7 +26,7 @@ __all__ = ["scenario_of_run", "page", "write"]
 TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
 
 
-def scenario_of_run(run_dir) -> scenarios.Scenario:
+def scenario_of_run(run_dir: str | os.PathLike) -> scenarios.Scenario:
     """The scenario whose complete run folder ``run_dir`` is; ConfigError (one line) otherwise."""
     import pyarrow.parquet as pq
 
@@ -55,7 +57,7 @@ def _json_ready(value):
     return value
 
 
-def page(data, scene_script) -> str:
+def page(data: dict[str, Any], scene_script: str) -> str:
     """The HTML page of ``data`` (a scenario's ``replay_data``) drawn by ``scene_script``."""
     template = resources.files(__package__).joinpath(TEMPLATE).read_text(encoding="utf-8")
     # "</" inside the script elements would end them early; JSON may write it as "<\/"
@@ -63,7 +65,7 @@ def page(data, scene_script) -> str:
     return template.replace("/*DATA*/", embedded, 1).replace("/*SCENE*/", scene_script, 1)
 
 
-def write(run_dir, out) -> Path:
+def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
     """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or ``out``

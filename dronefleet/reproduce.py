@@ -38,13 +38,16 @@ command lists what differs (exit 1). It only reads: the committed ``results/`` u
 ``--out`` names another root.
 """
 
+import argparse
 import functools
 import logging
 import os
 import sys
 import tempfile
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import pyarrow as pa
@@ -55,7 +58,7 @@ from .delivery import analysis
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
-from .sweeps import Progress, SweepError, available_cpus, dataset, load_sweep, run_sweep
+from .sweeps import Progress, Run, Sweep, SweepError, available_cpus, dataset, load_sweep, run_sweep
 
 log = logging.getLogger("dronefleet.reproduce")  # not __name__: it also runs as __main__
 
@@ -97,7 +100,8 @@ CHECK_RUNS = {
 class Study:
     """The study's sweeps under one results root: loaded (validated) once, run on demand."""
 
-    def __init__(self, results, quick=False, jobs=None, log=log.info, theta=None):
+    def __init__(self, results: str | os.PathLike, quick: bool = False, jobs: int | None = None,
+                 log: Callable[[str], object] = log.info, theta: float | None = None) -> None:
         self.root = Path(results) / "quick" if quick else Path(results)
         self.quick = quick
         self.theta = theta      # Figure 19's threshold, %; None: the study's criterion picks it
@@ -108,7 +112,7 @@ class Study:
         self._datasets = {}     # (sweep, table) -> its dataset of done runs, opened once
         self.memo = {}          # results figures share within one reproduce call, by scenario
 
-    def sweep(self, name):
+    def sweep(self, name: str) -> Sweep:
         """The sweep ``name``, with --quick's changes; the reservation sweep reads the rules sweep's fleets."""
         if name not in self._sweeps:
             changes = dict(QUICK_CHANGES) if self.quick else {}
@@ -119,10 +123,10 @@ class Study:
             self._sweeps[name] = load_sweep(path, changes=changes, seeds=QUICK_SEEDS if self.quick else None)
         return self._sweeps[name]
 
-    def out(self, name):
+    def out(self, name: str) -> Path:
         return self.root / self.sweep(name).name
 
-    def fleet_template(self):
+    def fleet_template(self) -> Path:
         """The fleet files of the rules sweep's least_confident runs at tau 15, with ``{seed}``.
 
         Relative to the working directory, like the results root (and, for the committed
@@ -137,7 +141,7 @@ class Study:
         path = run.path(self.out("rules"), "fleet")
         return path.parent.parent / "seed={seed}" / path.name
 
-    def ensure(self, name):
+    def ensure(self, name: str) -> None:
         """Run what is missing of sweep ``name`` (once per study); raise if any run failed."""
         if name in self._ensured:
             return
@@ -153,14 +157,14 @@ class Study:
                              f"{sweep.path} --results {self.root}):\n{lines}")
         self._ensured.add(name)
 
-    def ensure_runs(self, name, runs):
+    def ensure_runs(self, name: str, runs: Sequence[Run]) -> None:
         """Run those of ``runs`` (of sweep ``name``) that are not done; raise if any failed."""
         _, failures = run_sweep(self.sweep(name), self.out(name), runs, self.jobs)
         if failures:
             lines = "; ".join(f"{run.partition}: {error}" for run, error in failures.items())
             raise SweepError(f"sweep {name}: {len(failures)} runs failed: {lines}")
 
-    def table(self, name, table, **where):
+    def table(self, name: str, table: str, **where: Any) -> pd.DataFrame:
         """Table ``table`` of sweep ``name`` as pandas, with typed grid columns, filtered on ``where``."""
         import pyarrow.compute as pc
 
@@ -173,10 +177,10 @@ class Study:
             condition = term if condition is None else condition & term
         return data.to_table(filter=condition).to_pandas()
 
-    def horizon_s(self, name):
+    def horizon_s(self, name: str) -> float:
         return self.sweep(name).runs[0].config.horizon_s
 
-    def figure_dir(self, figure):
+    def figure_dir(self, figure: str) -> Path:
         path = self.root / figure
         path.mkdir(parents=True, exist_ok=True)
         return path
@@ -229,7 +233,7 @@ def _read_parquet(path, figure):
 # draw_<figure>(study) draws its files (PNG, PDF, SVG each) from those tables alone.
 
 
-def tidy_fig16(study):
+def tidy_fig16(study: Study) -> None:
     d = study.figure_dir("fig16")
     _write_runs(study, "fig16", ("rules", {}))
     _write_parquet(analysis.run_outcomes(study.table("rules", "summary")), d / "outcomes.parquet")
@@ -237,7 +241,7 @@ def tidy_fig16(study):
     _write_parquet(analysis.backlog_by_arrival_week(orders, study.horizon_s("rules")), d / "backlog.parquet")
 
 
-def draw_fig16(study, figure="fig16"):
+def draw_fig16(study: Study, figure: str = "fig16") -> list[Path]:
     from .delivery import figures
 
     d = study.root / figure
@@ -247,20 +251,20 @@ def draw_fig16(study, figure="fig16"):
             *figures.backlog_bars(backlog, d / f"{figure}c")]
 
 
-def tidy_fig17(study):
+def tidy_fig17(study: Study) -> None:
     _write_runs(study, "fig17", ("rules", {"tau_minutes": LEARNING_TAU}))
     fleet = study.table("rules", "fleet", tau_minutes=LEARNING_TAU)
     _write_parquet(analysis.weekly_accuracy(fleet), study.figure_dir("fig17") / "accuracy.parquet")
 
 
-def draw_fig17(study):
+def draw_fig17(study: Study) -> list[Path]:
     from .delivery import figures
 
     accuracy = _read(study, "fig17", "accuracy")
     return figures.accuracy_over_weeks(accuracy, study.root / "fig17" / "fig17")
 
 
-def tidy_fig18(study):
+def tidy_fig18(study: Study) -> None:
     _write_runs(study, "fig18", ("rules", {"rule": "least_confident", "tau_minutes": LEARNING_TAU}))
     fleet = study.table("rules", "fleet", rule="least_confident", tau_minutes=LEARNING_TAU)
     final = fleet[fleet.week == fleet.week.max()]
@@ -268,14 +272,14 @@ def tidy_fig18(study):
     _write_parquet(analysis.winner_soh_grid(final, config), study.figure_dir("fig18") / "winner_soh.parquet")
 
 
-def draw_fig18(study):
+def draw_fig18(study: Study) -> list[Path]:
     from .delivery import figures
 
     grid = _read(study, "fig18", "winner_soh")
     return figures.winner_soh_heatmaps(grid, study.root / "fig18" / "fig18")
 
 
-def tidy_fig19(study):
+def tidy_fig19(study: Study) -> None:
     d = study.figure_dir("fig19")
     _write_runs(study, "fig19", ("thresholds", {}), ("rules", {"rule": "least_confident"}))
     by = ("theta", "tau_minutes")
@@ -296,7 +300,7 @@ def tidy_fig19(study):
                    d / "backlog.parquet")
 
 
-def draw_fig19(study):
+def draw_fig19(study: Study) -> list[Path]:
     from .delivery import figures
 
     table = _read(study, "fig19", "thresholds")
@@ -308,14 +312,14 @@ def draw_fig19(study):
     return paths + draw_fig16(study, figure="fig19")
 
 
-def tidy_fig20(study):
+def tidy_fig20(study: Study) -> None:
     _write_runs(study, "fig20", ("reservations", {}))
     orders = study.table("reservations", "orders")
     pending = analysis.backlog_by_arrival_week(orders, study.horizon_s("reservations"), by=("rule",))
     _write_parquet(pending, study.figure_dir("fig20") / "pending.parquet")
 
 
-def draw_fig20(study):
+def draw_fig20(study: Study) -> list[Path]:
     from .delivery import figures
 
     return figures.pending_bars(_read(study, "fig20", "pending"), study.root / "fig20" / "fig20")
@@ -343,7 +347,9 @@ def _check_theta(study, figures, redraw):
                          f"{', '.join(f'{value:g}' for value in sweep.grid['theta'])}")
 
 
-def reproduce(figures, out=DEFAULT_OUT, quick=False, jobs=None, redraw=False, log=log.info, theta=None):
+def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quick: bool = False,
+              jobs: int | None = None, redraw: bool = False, log: Callable[[str], object] = log.info,
+              theta: float | None = None) -> dict[str, list[Path]]:
     """Reproduce ``figures`` (names of :data:`FIGURES`) under the results root ``out``: run
     missing sweeps, tidy, draw.
 
@@ -380,7 +386,8 @@ def _same(a, b):
     return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
 
 
-def check(figure, results=COMMITTED_RESULTS, quick=False, log=log.info):
+def check(figure: str, results: str | os.PathLike = COMMITTED_RESULTS, quick: bool = False,
+          log: Callable[[str], object] = log.info) -> list[str]:
     """Re-run :data:`CHECK_RUNS` of ``figure`` and compare them with its ``runs.parquet``.
 
     The runs execute one after the other in this process, in a temporary results root
@@ -428,7 +435,7 @@ def check(figure, results=COMMITTED_RESULTS, quick=False, log=log.info):
     return differences
 
 
-def command(args):
+def command(args: argparse.Namespace) -> int:
     """``dronefleet reproduce``."""
     figures = FIGURES if "all" in args.figure else tuple(dict.fromkeys(args.figure))
     named = " ".join(args.figure)

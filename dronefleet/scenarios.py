@@ -70,12 +70,18 @@ imports its module only when first used, so ``dronefleet --help`` stays cheap.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from importlib import resources
+from pathlib import Path
 from types import ModuleType
-from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from .config import SCENARIO_KEY, ConfigError, _show, _suggest, read_toml
+
+if TYPE_CHECKING:
+    import pyarrow
 
 __all__ = ["Field", "Scenario", "SCENARIOS", "get", "scenario_of", "load"]
 
@@ -125,47 +131,48 @@ class Scenario:
     def seeds_required(self) -> bool:
         return self.module.SEEDS_REQUIRED
 
-    def load(self, path=None, overrides=(), seed=None):
+    def load(self, path: str | os.PathLike | None = None, overrides: Iterable[str] = (),
+             seed: int | None = None) -> Any:
         return self.module.load(path, overrides, seed)
 
     def resolve_key(self, key: str) -> str:
         return self.module.resolve_key(key)
 
-    def replace(self, config, changes):
+    def replace(self, config: Any, changes: Mapping[str, Any]) -> Any:
         return self.module.replace(config, changes)
 
-    def value(self, config, name: str):
+    def value(self, config: Any, name: str) -> Any:
         return self.module.value(config, name)
 
-    def replicates(self, config) -> range | None:
+    def replicates(self, config: Any) -> range | None:
         """The replicates a run of ``config`` holds; None if it is the one its seed names."""
         replicates = getattr(self.module, "replicates", None)
         return None if replicates is None else replicates(config)
 
-    def outdated(self, config, summary) -> bool:
+    def outdated(self, config: Any, summary: Path) -> bool:
         outdated = getattr(self.module, "outdated", None)
         return outdated is not None and outdated(config, summary)
 
-    def read_config(self, path):
+    def read_config(self, path: str | os.PathLike) -> Any:
         return self.module.read_config(path)
 
-    def simulate(self, config) -> dict:
+    def simulate(self, config: Any) -> dict[str, pyarrow.Table]:
         return self.module.simulate(config)
 
-    def format_summary(self, tables) -> str:
+    def format_summary(self, tables: Mapping[str, pyarrow.Table]) -> str:
         return self.module.format_summary(tables)
 
-    def describe(self, config) -> str:
+    def describe(self, config: Any) -> str:
         return self.module.describe(config)
 
-    def label(self, config) -> str:
+    def label(self, config: Any) -> str:
         return self.module.label(config)
 
     @property
     def format_bounds(self) -> Callable | None:
         return getattr(self.module, "format_bounds", None)
 
-    def replay_data(self, run_dir) -> dict:
+    def replay_data(self, run_dir: Path) -> dict[str, Any]:
         """The replay page's data of the run folder ``run_dir``; ConfigError if the scenario has no replay."""
         replay_data = getattr(self.module, "replay_data", None)
         if replay_data is None:
@@ -197,7 +204,7 @@ SCENARIOS: dict[str, Scenario] = {
 }
 
 
-def get(name, where: str = "") -> Scenario:
+def get(name: object, where: str = "") -> Scenario:
     """The scenario registered as ``name``; ConfigError listing the registered ones if none."""
     if isinstance(name, str) and name in SCENARIOS:
         return SCENARIOS[name]
@@ -206,7 +213,7 @@ def get(name, where: str = "") -> Scenario:
                       f"registered scenarios: {', '.join(SCENARIOS)}", [SCENARIO_KEY])
 
 
-def scenario_of(path) -> Scenario:
+def scenario_of(path: str | os.PathLike | None) -> Scenario:
     """The scenario a config file names (``scenario = "..."`` at its top level; absent or no
     file: delivery)."""
     if path is None:
@@ -215,7 +222,8 @@ def scenario_of(path) -> Scenario:
     return get(document.get(SCENARIO_KEY, "delivery"), f"config file {str(path)!r}: ")
 
 
-def load(path=None, overrides=(), seed=None):
+def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (),
+         seed: int | None = None) -> tuple[Scenario, Any]:
     """``(scenario, config)`` of a config file: dispatch on its scenario, then its ``load``."""
     scenario = scenario_of(path)
     return scenario, scenario.load(path, overrides, seed)

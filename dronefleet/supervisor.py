@@ -13,6 +13,7 @@ leaves the other supervisors where they are.
   controllers (input checks, callbacks, random choice of a controllable event).
 """
 
+import os
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -326,7 +327,7 @@ def _walk_block(path, data, k, start, end, event_index, alphabet_k):
     return states
 
 
-def load_supervisor(path) -> Automaton:
+def load_supervisor(path: str | os.PathLike) -> Automaton:
     """Read, validate and build the supervisors of a Nadzoru 2 YAML file.
 
     Everything is checked before the automaton is built; ``sup_current_state``
@@ -489,7 +490,7 @@ class SupervisorVM:
     uncontrollable event in every state, so it is not affected.
     """
 
-    def __init__(self, automaton: Automaton, rng: np.random.Generator | None = None):
+    def __init__(self, automaton: Automaton, rng: np.random.Generator | None = None) -> None:
         self.automaton = automaton
         self.rng = np.random.default_rng() if rng is None else rng
         self._table = automaton.transition_table(automaton.events)

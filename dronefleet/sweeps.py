@@ -96,16 +96,23 @@ import shlex
 import sys
 import time
 import traceback
+from collections.abc import Callable, Mapping, Sequence
 from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, read_toml
 from .outputs import OutputError, probe_folders
 from .scenarios import Scenario
+
+if TYPE_CHECKING:
+    import argparse
+
+    import pyarrow
+    import pyarrow.dataset
 
 log = logging.getLogger(__name__)
 
@@ -140,7 +147,7 @@ class Run:
     keys: tuple[str, ...]   # the grid's parameter names (sorted), then the scenario's seed key
     scenario: Scenario
 
-    def value(self, key: str):
+    def value(self, key: str) -> Any:
         """The run's value of config key ``key``."""
         return self.scenario.value(self.config, key)
 
@@ -326,7 +333,8 @@ def _check_replicates(scenario: Scenario, runs: list[Run], where: str) -> None:
                              "far apart", [key])
 
 
-def load_sweep(path, changes=None, seeds=None) -> Sweep:
+def load_sweep(path: str | os.PathLike, changes: Mapping[str, Any] | None = None,
+               seeds: Sequence[int] | None = None) -> Sweep:
     """Read and validate a sweep file: every run's config is built here, before any run.
 
     ``changes`` (config keys -> values, as in ``[set]``) override the file's ``[set]``, and
@@ -348,7 +356,8 @@ def load_sweep(path, changes=None, seeds=None) -> Sweep:
     return sweep_of_document(doc, path, text, changes, seeds)
 
 
-def sweep_of_document(doc: dict, path: Path, text: str, changes=None, seeds=None) -> Sweep:
+def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, Any] | None = None,
+                      seeds: Sequence[int] | None = None) -> Sweep:
     """:func:`load_sweep` of a sweep file's TOML document ``doc``, already read (or built in
     memory, as :func:`dronefleet.api.sweep` does): ``path`` names it in messages, gives the
     default name (its stem) and the folder ``[sweep] base`` is relative to; ``text`` is kept
@@ -607,7 +616,7 @@ def check_scheduler(address: str) -> str:
 _NOT_AN_ARRAY = {"SGE_TASK_ID": "undefined", "LSB_JOBINDEX": "0"}
 
 
-def task_from_environment(environ=os.environ, n_tasks: int | None = None) -> int | None:
+def task_from_environment(environ: Mapping[str, str] = os.environ, n_tasks: int | None = None) -> int | None:
     """The 0-based job-array task given by the scheduler's variables (:data:`TASK_VARIABLES`), if any.
 
     Every variable that is set is checked, and all that give a task must give the same one.
@@ -677,8 +686,8 @@ def _duration(seconds: float) -> str:
     return f"{int(minutes)} min {rest:04.1f} s" if minutes else f"{rest:.1f} s"
 
 
-def run_sweep(sweep: Sweep, out: Path, runs, jobs: int = 1, scheduler: str | None = None,
-              progress=None) -> tuple[int, dict[Run, str]]:
+def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, scheduler: str | None = None,
+              progress: Callable[[int, int, int], object] | None = None) -> tuple[int, dict[Run, str]]:
     """Execute those of ``runs`` (of ``sweep``) that are not done, into the dataset ``out``.
 
     Locally on ``jobs`` processes, or, with ``scheduler`` (a Dask scheduler address), one
@@ -728,7 +737,8 @@ def _ranges(numbers) -> str:
     return ",".join(str(s[0]) if len(s) == 1 else f"{s[0]}-{s[-1]}" for s in spans)
 
 
-def job_script(sweep: Sweep, results: Path, time_limit=None, partition=None, account=None) -> str:
+def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, partition: str | None = None,
+               account: str | None = None) -> str:
     """A SLURM job-array script running every task of ``sweep`` into ``results``/<name>.
 
     Paths are absolute and the python is this one (``sys.executable``), so the script works
@@ -778,7 +788,7 @@ def _partition_schema(sweep: Sweep):
     return pa.schema([(key, types[type(sweep.scenario.defaults[key])]) for key in sweep.runs[0].keys])
 
 
-def collect(sweep: Sweep, out: Path):
+def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     """The summary rows of every done run, in run order: its partition values (grid keys, seed
     key), then its summary (delivery: one row per run; replenishment: one row per trial).
 
@@ -804,7 +814,7 @@ def collect(sweep: Sweep, out: Path):
     return table, [run for run in sweep.runs if run not in finished]
 
 
-def dataset(sweep: Sweep, out, table: str):
+def dataset(sweep: Sweep, out: str | os.PathLike, table: str) -> pyarrow.dataset.Dataset:
     """``table`` of the sweep's done runs, in the dataset directory ``out`` (``results/<name>``),
     as one ``pyarrow.dataset.Dataset`` whose partition columns have the config's types.
 
@@ -835,7 +845,7 @@ def _open(args) -> tuple[Sweep, Path]:
     return sweep, out
 
 
-def plan_command(args) -> int:
+def plan_command(args: argparse.Namespace) -> int:
     """``dronefleet sweep plan``: print the runs and tasks, write the job-array script."""
     sweep, out = _open(args)
     script = Path(args.out) if args.out else out / f"{sweep.name}.sbatch"
@@ -853,7 +863,7 @@ def plan_command(args) -> int:
     return 0
 
 
-def run_command(args) -> int:
+def run_command(args: argparse.Namespace) -> int:
     """``dronefleet sweep run``: one task's runs, or all of them (local processes or Dask)."""
     sweep, out = _open(args)
     task = args.task_id if args.task_id is not None else task_from_environment(n_tasks=sweep.n_tasks)
@@ -894,7 +904,7 @@ def _recorded_error(path: Path) -> str:
         return f"(the record {path.name} cannot be read: {type(error).__name__})"
 
 
-def status_command(args) -> int:
+def status_command(args: argparse.Namespace) -> int:
     """``dronefleet sweep status``: done, missing and failed runs (with their errors)."""
     sweep, out = _open(args)
     found = [state(run, out) for run in sweep.runs]
@@ -910,7 +920,7 @@ def status_command(args) -> int:
     return 0 if not unfinished else 1
 
 
-def collect_command(args) -> int:
+def collect_command(args: argparse.Namespace) -> int:
     """``dronefleet sweep collect``: the summary rows of the done runs, as parquet."""
     sweep, out = _open(args)
     table, not_done = collect(sweep, out)

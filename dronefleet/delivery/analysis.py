@@ -23,9 +23,13 @@ Figure      functions
 ==========  ================================================================
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
+from .config import Config
 from .metrics import by_arrival_week
 from .policy import standardise
 
@@ -78,7 +82,7 @@ def _groups(frame, keys):
     return frame.groupby(list(keys), sort=True, observed=True, dropna=False)
 
 
-def run_outcomes(summary, by=("rule", "tau_minutes")):
+def run_outcomes(summary: pd.DataFrame, by: Sequence[str] = ("rule", "tau_minutes")) -> pd.DataFrame:
     """One row per run with the metrics of Figures 16 and 19, panels (a) and (b).
 
     Parameters
@@ -109,7 +113,8 @@ def run_outcomes(summary, by=("rule", "tau_minutes")):
     return out.sort_values(keys, ignore_index=True)
 
 
-def backlog_by_arrival_week(orders, horizon_s, by=("rule", "tau_minutes")):
+def backlog_by_arrival_week(orders: pd.DataFrame, horizon_s: float,
+                            by: Sequence[str] = ("rule", "tau_minutes")) -> pd.DataFrame:
     """Pending orders and backlog age at the horizon by arrival week, for every run.
 
     The same computation as :func:`dronefleet.delivery.metrics.by_arrival_week`, done for all runs
@@ -144,7 +149,7 @@ def backlog_by_arrival_week(orders, horizon_s, by=("rule", "tau_minutes")):
     return pd.concat([runs.iloc[table["run"]].reset_index(drop=True), table.drop(columns="run")], axis=1)
 
 
-def weekly_accuracy(fleet, by=("rule",), confidence=0.95):
+def weekly_accuracy(fleet: pd.DataFrame, by: Sequence[str] = ("rule",), confidence: float = 0.95) -> pd.DataFrame:
     """Mean decision accuracy per week with its confidence band (Figure 17).
 
     The sample is every UAV of every run in a group (25 UAVs x 20 runs = 500 per rule in
@@ -183,7 +188,8 @@ def weekly_accuracy(fleet, by=("rule",), confidence=0.95):
     return out.drop(columns="sd")
 
 
-def winner_soh_grid(final_policies, config, socs=SOC_GRID, distances_m=DISTANCE_GRID, masses_kg=MASS_GRID):
+def winner_soh_grid(final_policies: pd.DataFrame, config: Config, socs: ArrayLike = SOC_GRID,
+                    distances_m: ArrayLike = DISTANCE_GRID, masses_kg: ArrayLike = MASS_GRID) -> pd.DataFrame:
     """Mean SoH of the least_confident winner over a grid of orders and SoCs (Figure 18).
 
     For every SoC, distance and mass, one auction among each run's UAVs, all at that
@@ -269,7 +275,7 @@ def winner_soh_grid(final_policies, config, socs=SOC_GRID, distances_m=DISTANCE_
     return pd.concat(parts, ignore_index=True)
 
 
-def threshold_table(outcomes):
+def threshold_table(outcomes: pd.DataFrame) -> tuple[pd.DataFrame, float]:
     """Figure 19's table: every threshold(theta) over all tau and seeds, and the best theta.
 
     The best theta is the study's: the most deliveries and the shortest delivery times
@@ -317,7 +323,7 @@ def threshold_table(outcomes):
     return table, best_theta
 
 
-def best_threshold_runs(frame, theta):
+def best_threshold_runs(frame: pd.DataFrame, theta: float) -> pd.DataFrame:
     """The rows of threshold(``theta``) runs, labelled to sit beside learning runs (Fig. 19 a-c).
 
     Parameters

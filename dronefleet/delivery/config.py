@@ -130,7 +130,7 @@ class RegisteredRule:
     loaded and checked by :func:`dronefleet.delivery.auction.resolve_rule`.
     """
 
-    def __init__(self, base: bool = False):
+    def __init__(self, base: bool = False) -> None:
         self.base = base
 
     def problem(self, value: str) -> str | None:

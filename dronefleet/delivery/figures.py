@@ -11,6 +11,7 @@ column) has its colour, marker, line style and hatch of
 :data:`dronefleet.figstyle.RULE_STYLES` in every figure.
 """
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -66,7 +67,7 @@ def _tau_labels(ax, corners, rule_styles):
                     color=rule_styles[rules[0]].colour if len(rules) == 1 else "black")
 
 
-def delivered_vs_delivery_time(outcomes, path):
+def delivered_vs_delivery_time(outcomes: pd.DataFrame, path: str | os.PathLike) -> list[Path]:
     """2-D box plots of delivered parcels against delivery time, one per (rule, tau) (Fig. 16a/19a).
 
     x: per-run median delivery time (min, log scale), y: delivered parcels. Each box spans the
@@ -120,7 +121,7 @@ def delivered_vs_delivery_time(outcomes, path):
     return figure_paths(path)
 
 
-def aborted_by_tau(outcomes, path):
+def aborted_by_tau(outcomes: pd.DataFrame, path: str | os.PathLike) -> list[Path]:
     """Box plots of aborted attempts (% of all attempts) against tau, side by side per rule (Fig. 16b/19b).
 
     Parameters
@@ -157,7 +158,7 @@ def aborted_by_tau(outcomes, path):
     return figure_paths(path)
 
 
-def backlog_bars(backlog, path):
+def backlog_bars(backlog: pd.DataFrame, path: str | os.PathLike) -> list[Path]:
     """Backlog age at the end, stacked by arrival week, per tau; one panel per rule (Fig. 16c/19c).
 
     Bar height: the mean over runs of the summed age (horizon - arrival) of the orders
@@ -197,7 +198,7 @@ def backlog_bars(backlog, path):
     return figure_paths(path)
 
 
-def accuracy_over_weeks(accuracy, path):
+def accuracy_over_weeks(accuracy: pd.DataFrame, path: str | os.PathLike) -> list[Path]:
     """Mean decision accuracy per week, one line per rule with its confidence band (Fig. 17).
 
     Parameters
@@ -227,7 +228,7 @@ def accuracy_over_weeks(accuracy, path):
     return figure_paths(path)
 
 
-def winner_soh_heatmaps(grid, path):
+def winner_soh_heatmaps(grid: pd.DataFrame, path: str | os.PathLike) -> list[Path]:
     """Mean SoH of the auction winner over distance and mass, one heatmap per SoC (Fig. 18).
 
     Blank where nobody bid in any run; one colour scale for every panel.
@@ -266,7 +267,7 @@ def winner_soh_heatmaps(grid, path):
     return figure_paths(path)
 
 
-def write_threshold_table(table, path):
+def write_threshold_table(table: pd.DataFrame, path: str | os.PathLike) -> tuple[Path, Path]:
     """Figure 19's table of thresholds, as CSV (SI units) and as Markdown (readable units).
 
     Parameters
@@ -301,7 +302,7 @@ def write_threshold_table(table, path):
     return csv, md
 
 
-def pending_bars(pending, path):
+def pending_bars(pending: pd.DataFrame, path: str | os.PathLike) -> list[Path]:
     """Pending orders at the end by arrival week, bars side by side per rule (Fig. 20).
 
     Bar: mean over runs; dots: the runs (spread evenly across the bar, in seed order).

@@ -13,12 +13,20 @@ NaN SoH) and refuses it with a one-line :class:`FleetFileError` naming the file,
 column, the UAV and the value.
 """
 
+from __future__ import annotations
+
+import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..config import ConfigError
+
+if TYPE_CHECKING:
+    from .config import Config
+    from .simulation import RunResult
 
 #: Columns a fleet file must have.
 COLUMNS = ("t_s", "uav", "soh", "w_distance", "w_mass", "w_soc", "intercept", "steps", "soc", "lost", "period")
@@ -44,7 +52,7 @@ class SavedFleet:
     period: int          # operating period that left this fleet (1 = learned from scratch)
 
 
-def seeded_path(path, seed):
+def seeded_path(path: str | os.PathLike, seed: int) -> Path:
     """``path`` with ``{seed}`` replaced by ``seed``: one pattern names the fleet of every seed."""
     return Path(str(path).replace("{seed}", str(seed)))
 
@@ -77,7 +85,7 @@ def _first_bad(ok):
     return int(bad[0]) if bad.size else None
 
 
-def load_fleet(path, config):
+def load_fleet(path: str | os.PathLike, config: Config) -> SavedFleet:
     """Read the fleet saved in ``path`` for a run of ``config``; refuse a bad file before any work.
 
     Checked, in order: the file (exists, a readable parquet file of at most MAX_ROWS rows,
@@ -190,7 +198,7 @@ def _num(x):
     return f"{x:g}"
 
 
-def save_fleet(result, path):
+def save_fleet(result: RunResult, path: str | os.PathLike) -> Path:
     """Write the fleet at the end of ``result`` to ``path`` (``{seed}`` replaced), atomically, as a fleet file.
 
     A UAV in flight at the end is saved with its SoC at that instant, as if it were at

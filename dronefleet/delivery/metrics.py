@@ -1,20 +1,29 @@
 """The study's metrics (docs/delivery-model.md section 11), vectorised over a run's arrays."""
 
+from __future__ import annotations
+
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .config import SECONDS_PER_WEEK
+from .config import SECONDS_PER_WEEK, Config
 from .energy import capable, config_power, drain_per_watt
 from .engine import IN_FLIGHT, OUTCOME_ABORTED, OUTCOME_DELIVERED
 from .policy import standardise
+
+if TYPE_CHECKING:
+    import pandas
+
+    from .simulation import RunResult
 
 #: Child of the run's SeedSequence that draws the accuracy test points. The simulation
 #: uses children 0-3, so evaluating a policy never changes a run.
 EVALUATION_STREAM = 4
 
 
-def run_metrics(result):
+def run_metrics(result: RunResult) -> dict[str, int | float]:
     """The metrics of one run, as a dict of Python scalars.
 
     orders_arrived; delivered; median_delivery_time_s (arrival to delivery, nan if none);
@@ -60,7 +69,8 @@ def _mean(values):
     return math.fsum(values) / values.shape[0] if values.shape[0] else float("nan")
 
 
-def by_arrival_week(arrival_s, delivered_s, horizon_s, run=None):
+def by_arrival_week(arrival_s: ArrayLike, delivered_s: ArrayLike, horizon_s: float,
+                    run: ArrayLike | None = None) -> pandas.DataFrame:
     """Pending orders and backlog age at the horizon, by the week the orders arrived in.
 
     Parameters
@@ -105,7 +115,7 @@ def by_arrival_week(arrival_s, delivered_s, horizon_s, run=None):
     return table if run is not None else table.drop(columns="run")
 
 
-def accuracy_points(config, n_points=1000):
+def accuracy_points(config: Config, n_points: int = 1000) -> np.ndarray:
     """The test points of :func:`decision_accuracy`: (n_points, 3) raw [distance_m, mass_kg, soc].
 
     d ~ U(distance range), m ~ U(mass range), SoC ~ U(0, 100), from the run's evaluation stream.
@@ -116,7 +126,8 @@ def accuracy_points(config, n_points=1000):
                             rng.uniform(0.0, 100.0, n_points)])
 
 
-def decision_accuracy(coef, intercept, soh, config, points=None):
+def decision_accuracy(coef: ArrayLike, intercept: ArrayLike, soh: ArrayLike, config: Config,
+                      points: ArrayLike | None = None) -> np.ndarray:
     """Share of test points where each policy's "bid" (f >= 0) equals ground-truth "capable".
 
     Parameters

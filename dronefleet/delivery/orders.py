@@ -6,6 +6,7 @@ import numpy as np
 from numba import njit
 
 from ..fpmath import log
+from .config import Config
 
 #: Orders are drawn in fixed-size blocks so that the stream does not depend on the
 #: horizon: a shorter run sees exactly the first orders of a longer one.
@@ -33,7 +34,7 @@ class Orders(NamedTuple):
     mass_kg: np.ndarray
 
 
-def generate_orders(config, rng):
+def generate_orders(config: Config, rng: np.random.Generator) -> Orders:
     """Draw the orders arriving in [0, horizon) from the run's order stream ``rng``.
 
     The first order arrives at t = 0 and gaps are Exp(tau) (:func:`exponential_gaps`). Mass ~ U(mass_min, mass_max);

@@ -30,12 +30,21 @@ period int16 (operating period: 1, or the saved fleet's plus one for a warm star
 :func:`dronefleet.delivery.metrics.run_metrics`.
 """
 
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pyarrow as pa
 
 from ..records import arrow_array, arrow_table, read_config_dict, write_tables
-from .config import SECONDS_PER_WEEK, config_from_dict
+from .config import SECONDS_PER_WEEK, Config, config_from_dict
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
+
+if TYPE_CHECKING:
+    from .simulation import RunResult
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 
@@ -44,7 +53,7 @@ def _nullable(values):
     return arrow_array(values, null=np.isnan(values))
 
 
-def orders_table(result):
+def orders_table(result: RunResult) -> pa.Table:
     o, a = result.orders, result.attempts
     n = o["arrival_s"].shape[0]
     by_order = np.argsort(a["order"], kind="stable")
@@ -63,7 +72,7 @@ def orders_table(result):
     })
 
 
-def attempts_table(result):
+def attempts_table(result: RunResult) -> pa.Table:
     a = result.attempts
     n = a["uav"].shape[0]
     outcome = np.where(a["lost"], "lost", np.array(OUTCOME_NAMES)[a["outcome"]])
@@ -88,7 +97,7 @@ def attempts_table(result):
     })
 
 
-def fleet_table(result):
+def fleet_table(result: RunResult) -> pa.Table:
     from .metrics import accuracy_points, decision_accuracy
 
     columns = {name: [] for name in ("week", "t_s", "uav", "soh", "w_distance", "w_mass", "w_soc",
@@ -111,7 +120,7 @@ def fleet_table(result):
     return arrow_table(table)
 
 
-def timeseries_table(result):
+def timeseries_table(result: RunResult) -> pa.Table:
     s = result.series
     return arrow_table({
         "t_s": s["t_s"], "delivered": s["delivered"], "unallocated": s["unallocated"],
@@ -120,7 +129,7 @@ def timeseries_table(result):
     })
 
 
-def summary_table(result):
+def summary_table(result: RunResult) -> pa.Table:
     from .metrics import run_metrics
 
     c = result.config
@@ -129,17 +138,17 @@ def summary_table(result):
     return arrow_table({key: [value] for key, value in row.items()})
 
 
-def tables(result):
+def tables(result: RunResult) -> dict[str, pa.Table]:
     """All tables of a run, by name (see the module doc for their schemas)."""
     return {"orders": orders_table(result), "attempts": attempts_table(result), "fleet": fleet_table(result),
             "timeseries": timeseries_table(result), "summary": summary_table(result)}
 
 
-def write_run(result, out_dir, overwrite=False):
+def write_run(result: RunResult, out_dir: str | os.PathLike, overwrite: bool = False) -> dict[str, Path]:
     """Write every table of the delivery run ``result``: :func:`dronefleet.records.write_tables` of :func:`tables`."""
     return write_tables(tables(result), out_dir, result.config, overwrite)
 
 
-def read_config(path):
+def read_config(path: str | os.PathLike) -> Config:
     """The resolved delivery config embedded in a dronefleet parquet file."""
     return config_from_dict(read_config_dict(path))

@@ -10,6 +10,8 @@ landing values, and on the ground between a landing and the next takeoff (chargi
 """
 
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -28,7 +30,7 @@ def _rounded(values, decimals):
     return np.round(np.asarray(values, dtype=np.float64), decimals).tolist()
 
 
-def replay_data(run_dir):
+def replay_data(run_dir: Path) -> dict[str, Any]:
     """The page's data of the delivery run in ``run_dir`` (a folder ``dronefleet run`` wrote).
 
     Returns a JSON-ready dict: ``title``, ``duration_s`` (the horizon [s]), ``week_s``,

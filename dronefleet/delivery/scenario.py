@@ -9,11 +9,20 @@ what only delivery has (fleet files, the progress bar in weeks); it prints and w
 exactly what this module does.
 """
 
+from __future__ import annotations
+
+import os
 import re
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ..scenarios import Field
-from .config import PARAMETERS, AnyText, Interval, Options, default_config, load_config, resolve_key
+from .config import PARAMETERS, AnyText, Config, Interval, Options, default_config, load_config, resolve_key
 from .config import replace as replace_fields
+
+if TYPE_CHECKING:
+    import pyarrow
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
            "replace", "value", "read_config", "simulate", "outdated", "format_summary", "describe", "label",
@@ -48,27 +57,27 @@ SCHEMA = {name: _field(p) for name, p in PARAMETERS.items()}
 DEFAULTS = {name: getattr(default_config(), name) for name in PARAMETERS}
 
 
-def load(path=None, overrides=(), seed=None):
+def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), seed: int | None = None) -> Config:
     """:func:`dronefleet.delivery.config.load_config`: the one validation entry point of delivery."""
     return load_config(path, overrides, seed)
 
 
-def replace(config, changes):
+def replace(config: Config, changes: Mapping[str, Any]) -> Config:
     """:func:`dronefleet.delivery.config.replace`: a validated copy with ``changes`` applied."""
     return replace_fields(config, **changes)
 
 
-def value(config, name):
+def value(config: Config, name: str) -> Any:
     return getattr(config, name)
 
 
-def read_config(path):
+def read_config(path: str | os.PathLike) -> Config:
     from .records import read_config as read
 
     return read(path)
 
 
-def simulate(config):
+def simulate(config: Config) -> dict[str, pyarrow.Table]:
     """One run of ``config`` -> its tables (:mod:`dronefleet.delivery.records`); the simulation
     loads the run's fleet file, if any."""
     from .records import tables
@@ -77,7 +86,7 @@ def simulate(config):
     return tables(run(config))
 
 
-def outdated(config, summary):
+def outdated(config: Config, summary: Path) -> bool:
     """True if the run starts from a saved fleet (``fleet_file``, ``{seed}`` replaced) written
     after the run's ``summary``: the fleet was written again since (the sweep that made it
     rerun after a fix, say), so the run's results come from a fleet that is gone, and a rerun
@@ -91,23 +100,23 @@ def outdated(config, summary):
     return fleet.exists() and fleet.stat().st_mtime_ns > summary.stat().st_mtime_ns
 
 
-def format_summary(tables):
+def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
     """The run's metrics as ``dronefleet run`` prints them, from its summary table."""
     from ..cli import format_summary as lines
 
     return lines(tables["summary"].to_pylist()[0])
 
 
-def describe(config):
+def describe(config: Config) -> str:
     return (f"seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
             f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks")
 
 
-def label(config):
+def label(config: Config) -> str:
     return f"seed{config.seed}"
 
 
-def replay_data(run_dir):
+def replay_data(run_dir: Path) -> dict[str, Any]:
     """The replay page's data of a run folder: :func:`dronefleet.delivery.replay.replay_data`."""
     from .replay import replay_data as data
 

@@ -12,16 +12,19 @@ with the seed of the first.
 """
 
 import math
+import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from . import engine
 from .auction import BIDS_ON, PLUGIN, RULES, resolve_rule
-from .config import SECONDS_PER_WEEK
+from .config import SECONDS_PER_WEEK, Config
 from .energy import charge_rate, config_power, drain_per_watt
-from .fleet import load_fleet
-from .orders import generate_orders
+from .fleet import SavedFleet, load_fleet
+from .orders import Orders, generate_orders
 from .policy import initial_fit, optimal_init, standardise
 from ..supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
 
@@ -71,7 +74,7 @@ class RunTooLargeError(RuntimeError):
     """The run made far more delivery attempts than it has orders (see :func:`attempt_limit`)."""
 
 
-def attempt_limit(config):
+def attempt_limit(config: Config) -> int:
     """Most delivery attempts a run of ``config`` may make: max(200000, 4 x expected orders).
 
     A sound run makes about 1.3 attempts per order (the paper's: ~7,000); only degenerate
@@ -85,7 +88,7 @@ def attempt_limit(config):
 PERIOD_STREAMS = 1000
 
 
-def run_seed_sequence(seed, period=1):
+def run_seed_sequence(seed: int, period: int = 1) -> np.random.SeedSequence:
     """The root of a run's random streams: the seed's, or for a later period a child of it."""
     if period == 1:
         return np.random.SeedSequence(seed)
@@ -98,7 +101,8 @@ def _streams(seed, n_uavs, period):
             [np.random.default_rng(s) for s in learners.spawn(n_uavs)], np.random.default_rng(bids))
 
 
-def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
+def initial_state(config: Config, supervisor: str | os.PathLike | None = None, orders: Orders | None = None,
+                  soh: np.ndarray | Sequence[float] | None = None, fleet: SavedFleet | None = None) -> RunState:
     """The state at t = 0: an empty queue, orders to come, and the fleet at the FC.
 
     A new fleet has drawn SoH, fitted initial policies and full batteries. ``fleet`` (a
@@ -188,7 +192,7 @@ def _attempt_table(capacity, old=None):
     return new
 
 
-def advance(state, t_stop):
+def advance(state: RunState, t_stop: float) -> None:
     """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed.
 
     Raises SupervisorError if the supervisor refuses an event, InvalidStateError if the state
@@ -224,7 +228,7 @@ def advance(state, t_stop):
             f"{state.fleet.sup[i].tolist()}; the engine stopped before taking it")
 
 
-def snapshot(state, t):
+def snapshot(state: RunState, t: float) -> dict[str, Any]:
     """The fleet at time ``t``: SoH, policy, learner step counter, SoC, lost flag (arrays of shape (S,))."""
     fleet = state.fleet
     soc = np.array([engine.soc_at(fleet, i, t, state.params.charge_rate) for i in range(fleet.soh.shape[0])])
@@ -232,13 +236,15 @@ def snapshot(state, t):
                 steps=fleet.steps.copy(), soc=soc, lost=fleet.mode == engine.LOST)
 
 
-def stops(horizon_s):
+def stops(horizon_s: float) -> list[float]:
     """Week ends up to the horizon, and the horizon itself: where a run pauses to take a snapshot."""
     weeks = np.arange(1, int(horizon_s // SECONDS_PER_WEEK) + 1) * SECONDS_PER_WEEK
     return [float(w) for w in weeks if w < horizon_s] + [float(horizon_s)]
 
 
-def simulate(config, supervisor=None, progress=None, orders=None, soh=None, fleet=None):
+def simulate(config: Config, supervisor: str | os.PathLike | None = None,
+             progress: Callable[[float], object] | None = None, orders: Orders | None = None,
+             soh: np.ndarray | Sequence[float] | None = None, fleet: SavedFleet | None = None) -> RunResult:
     """Run the model of ``config`` (seed included) and return its :class:`RunResult`.
 
     ``progress(t_s)`` is called at every week end if given; ``supervisor``, ``orders``,
@@ -254,7 +260,7 @@ def simulate(config, supervisor=None, progress=None, orders=None, soh=None, flee
     return collect(state, snapshots, config)
 
 
-def collect(state, snapshots, config):
+def collect(state: RunState, snapshots: list[dict[str, Any]], config: Config) -> RunResult:
     """Turn the final state into a :class:`RunResult` (copies of the valid rows)."""
     book, n_attempts = state.book, int(state.counters[engine.N_ATTEMPTS])
     attempts = {name: column[:n_attempts].copy() for name, column in zip(engine.Attempts._fields, state.attempts)}

@@ -16,7 +16,9 @@ processes) into a tidy per-trial table; :func:`bounds_table` gives the analytic 
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -25,6 +27,9 @@ from ..config import shipped_config
 from ..sweeps import SweepError
 from .bounds import BoundUndefinedError, bounds
 from .params import Params
+
+if TYPE_CHECKING:
+    from .scenario import Config
 
 __all__ = ["FIGURES", "CONFIG_COLUMNS", "METRIC_COLUMNS", "grid_path", "config_row", "run_configs",
            "bounds_table"]
@@ -57,7 +62,8 @@ def _trials_of(config) -> dict:
     return {column: result[column] for column in ("trial", "seed", *METRIC_COLUMNS)}
 
 
-def run_configs(configs, jobs=1, done=None) -> pd.DataFrame:
+def run_configs(configs: Iterable[Config], jobs: int = 1,
+                done: dict[Config, dict[str, Any]] | None = None) -> pd.DataFrame:
     """Every trial of every configuration as one tidy table.
 
     Parameters
@@ -100,7 +106,7 @@ def run_configs(configs, jobs=1, done=None) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def bounds_table(configs) -> pd.DataFrame:
+def bounds_table(configs: Iterable[Params]) -> pd.DataFrame:
     """The section 9 bounds of each configuration (its strategy's reference bound).
 
     Returns

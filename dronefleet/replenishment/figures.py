@@ -10,10 +10,18 @@ Each strategy has its colour and marker of :data:`dronefleet.figstyle.STRATEGY_S
 every figure: means are solid lines with filled markers, bounds dashed with hollow ones.
 """
 
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..figstyle import STRATEGY_STYLES, _dodge, _figure, figure_paths, styles
+
+if TYPE_CHECKING:
+    import pandas
 
 LABELS = {"fixed": "fixed chargers", "mobile": "mobile chargers"}
 #: Fig 9's panels: (per-trial column, what it is (the colour bar's label), number format).
@@ -25,7 +33,7 @@ HEATMAP_PANELS = (("work", "work W (points)", "{:.0f}"),
 _SPREAD = 0.012
 
 
-def heatmaps(runs, path):
+def heatmaps(runs: pandas.DataFrame, path: str | os.PathLike) -> list[Path]:
     """Fig 9: mean W, total energy, efficiency and depleted workers over (n_m, phi), four panels.
 
     Rows phi, columns n_m; the fixed strategy (no mobile chargers) in the "0 chargers / 0x"
@@ -72,8 +80,9 @@ def _spread(x, k, n, log_x, span):
     return x * 10.0 ** offset if log_x else x + offset
 
 
-def work_and_efficiency(runs, bounds, path, x, xlabel, efficiency="efficiency", log_x=False,
-                        fixed_line=False):
+def work_and_efficiency(runs: pandas.DataFrame, bounds: pandas.DataFrame, path: str | os.PathLike, x: str,
+                        xlabel: str, efficiency: str = "efficiency", log_x: bool = False,
+                        fixed_line: bool = False) -> list[Path]:
     """Figs 10-12: work and efficiency against the varied parameter ``x``, both strategies.
 
     Per-trial values as small dots (each configuration's trials spread over a narrow

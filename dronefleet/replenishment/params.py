@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from ..config import ConfigError
 
@@ -106,7 +107,7 @@ class Params:
     def mobile(self) -> bool:
         return self.strategy == "mobile"
 
-    def replace(self, **changes) -> Params:
+    def replace(self, **changes: Any) -> Params:
         """A validated copy with ``changes`` applied."""
         return dataclasses.replace(self, **changes).validate()
 

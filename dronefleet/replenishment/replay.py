@@ -7,6 +7,8 @@ every robot's centre, battery and controller phase at each sample of the time se
 """
 
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,7 +24,7 @@ AREAS = {"base": [-0.825, -0.5, -0.825, 0.825], "transfer": [0.2, 0.5, -0.825, 0
 MAX_FRAMES = 20_000
 
 
-def replay_data(run_dir):
+def replay_data(run_dir: Path) -> dict[str, Any]:
     """The page's data of the replenishment run in ``run_dir``: its first trial.
 
     Returns a JSON-ready dict: ``title``, ``duration_s`` (ticks x 0.1 s), ``frame_s`` (time

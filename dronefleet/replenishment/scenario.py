@@ -39,7 +39,11 @@ from __future__ import annotations
 
 import json
 import math
+import os
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -48,6 +52,9 @@ from ..scenarios import Field
 from .bounds import COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds
 from .params import BASE_CAPACITY, Params
 from .simulate import TRIAL_SEED_FACTOR, summary_columns
+
+if TYPE_CHECKING:
+    import pyarrow
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "Config", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "simulate",
@@ -106,7 +113,7 @@ class Config:
     def last_trial(self) -> int:
         return self.first_trial + self.params.trials - 1
 
-    def value(self, name):
+    def value(self, name: str) -> Any:
         return self.first_trial if name == "first_trial" else getattr(self.params, name)
 
     def to_dict(self) -> dict:
@@ -170,7 +177,7 @@ def _unknown_key(key, where=""):
                        f"Allowed keys: {', '.join(f'{SCHEMA[k].section}.{k}' for k in SCHEMA)}")
 
 
-def resolve_key(key):
+def resolve_key(key: str) -> str:
     """'section.key' or a bare key -> the key name."""
     section, dot, name = key.rpartition(".")
     if name not in SCHEMA or (dot and section != SCHEMA[name].section):
@@ -208,7 +215,7 @@ def _flatten(document, where=None, origin=None):
     return flat
 
 
-def load(path=None, overrides=(), seed=None) -> Config:
+def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), seed: int | None = None) -> Config:
     """Read a replenishment config: defaults < file < ``overrides`` (``"key=value"``, in order).
 
     Raises
@@ -232,11 +239,11 @@ def load(path=None, overrides=(), seed=None) -> Config:
     return _build(values, origin)
 
 
-def value(config: Config, name):
+def value(config: Config, name: str) -> Any:
     return config.value(name)
 
 
-def replace(config: Config, changes) -> Config:
+def replace(config: Config, changes: Mapping[str, Any]) -> Config:
     """A validated copy of ``config`` with ``changes`` (``{key: value}``) applied, typed as in :func:`load`."""
     for name in changes:
         if name not in SCHEMA:
@@ -249,12 +256,12 @@ def replicates(config: Config) -> range:
     return range(config.first_trial, config.last_trial + 1)
 
 
-def config_from_dict(document) -> Config:
+def config_from_dict(document: Mapping[str, Any]) -> Config:
     """:meth:`Config.to_dict`'s form (any subset of keys) -> Config."""
     return _build({**DEFAULTS, **_flatten(document)}, {})
 
 
-def read_config(path) -> Config:
+def read_config(path: str | os.PathLike) -> Config:
     """The config embedded in a replenishment parquet file."""
     from ..records import read_config_dict
 
@@ -268,7 +275,7 @@ _PHASES = {"workers": ("charging", "to_work", "working", "to_charge"),
            "chargers": ("charging", "to_transfer", "sharing", "to_base")}
 
 
-def simulate(config: Config) -> dict:
+def simulate(config: Config) -> dict[str, pyarrow.Table]:
     """Every trial of ``config`` in one kernel call -> ``{"summary", "timeseries"}`` pyarrow tables."""
     from ..records import CONFIG_KEY, arrow_table
     from .kernel import TS_CHARGER_PHASE, TS_STORED, TS_WORK, TS_WORKER_PHASE
@@ -317,7 +324,7 @@ _SUMMARY_ROWS = (
 )
 
 
-def format_summary(tables) -> str:
+def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
     """Mean, sd and min-max over the trials of each metric, the section-9 bound beside work and
     efficiency (W_fix and E_fix for fixed chargers; W_cs and E_cs for mobile ones, E_cs beside
     the efficiency that counts the transfer loss, Fig 12's form, and beside the plain one when
@@ -373,7 +380,7 @@ def format_bounds(config: Config) -> str:
                      f"    {row[0]:<12}{row[1]:>10} {row[2]:<7} {row[3]}" for row in rows)
 
 
-def replay_data(run_dir):
+def replay_data(run_dir: Path) -> dict[str, Any]:
     """The replay page's data of a run folder: :func:`dronefleet.replenishment.replay.replay_data`."""
     from .replay import replay_data as data
 

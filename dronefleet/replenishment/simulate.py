@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -40,7 +41,7 @@ def _default_supervisor(name):
     return load_supervisor(SUPERVISOR_FILES[name])
 
 
-def trial_seeds(trials, first=1):
+def trial_seeds(trials: int, first: int = 1) -> np.ndarray:
     """Seeds 876 k of trials k = first .. first + trials - 1 (int64 array)."""
     return TRIAL_SEED_FACTOR * np.arange(first, first + trials, dtype=np.int64)
 
@@ -103,8 +104,9 @@ def _mc_rank(n_chargers):
     return rank
 
 
-def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
-             wheel_noise=True, trace=False, track=False):
+def simulate(params: Params, trials: int | None = None, *, first_trial: int = 1,
+             supervisors: dict[str, Automaton] | None = None, wheel_noise: bool = True, trace: bool = False,
+             track: bool = False) -> dict[str, Any]:
     """Simulate every trial of ``params`` in one compiled call.
 
     Parameters
@@ -210,7 +212,7 @@ def simulate(params: Params, trials=None, *, first_trial=1, supervisors=None,
     return out
 
 
-def summary_columns():
+def summary_columns() -> tuple[str, ...]:
     """Names of the per-trial (one row per trial) entries of :func:`simulate`'s result."""
     return ("trial", "seed", "work", "energy", "work_energy", "efficiency",
             "efficiency_with_loss", "depleted_workers", "depleted_chargers", "shared", "lost")

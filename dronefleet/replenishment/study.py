@@ -9,7 +9,11 @@ figure (PNG, PDF, SVG) from those two files alone. ``--quick``: :data:`QUICK_TRI
 :data:`QUICK_TICKS` ticks.
 """
 
+from __future__ import annotations
+
 import time
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -18,6 +22,10 @@ from ..sweeps import SweepError, load_sweep
 from . import experiments
 from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
 from .params import Params
+
+if TYPE_CHECKING:
+    from ..reproduce import Study
+    from ..sweeps import Sweep
 
 QUICK_TRIALS = 4
 QUICK_TICKS = 1500
@@ -39,13 +47,13 @@ CURVES = {
     "fig12": dict(x="transfer_loss", xlabel="transfer loss lambda (fraction of what the charger gives)",
                   efficiency="efficiency_with_loss", fixed_line=True),
 }
-def grid(figure, quick=False):
+def grid(figure: str, quick: bool = False) -> Sweep:
     """The figure's sweep (``configs/sweeps/replenishment-<figure>.toml``), shortened with ``quick``."""
     changes = {"ticks": QUICK_TICKS, "trials": QUICK_TRIALS} if quick else None
     return load_sweep(experiments.grid_path(figure), changes=changes)
 
 
-def run_together(study, figures):
+def run_together(study: Study, figures: list[str]) -> None:
     """Run the grids of ``figures`` as one batch before their tables are tidied.
 
     One set of worker processes serves them all (each worker loads the kernel once, not
@@ -62,7 +70,7 @@ def run_together(study, figures):
               f"in {time.perf_counter() - start:.1f} s")
 
 
-def tidy(study, figure):
+def tidy(study: Study, figure: str) -> None:
     """Run the figure's grid (what :func:`run_together` has not run); write ``runs.parquet`` and
     ``bounds.parquet``."""
     from ..reproduce import _write_parquet
@@ -82,7 +90,7 @@ def tidy(study, figure):
     _write_parquet(experiments.bounds_table([config.params for config in configs]), d / "bounds.parquet")
 
 
-def draw(study, figure):
+def draw(study: Study, figure: str) -> list[Path]:
     """The figure's files (PNG, PDF, SVG) from its tables alone."""
     from ..reproduce import _read
     from . import figures
@@ -98,7 +106,7 @@ def _same(a, b):
     return a == b or (a != a and b != b)  # NaN equals NaN
 
 
-def check(study, figure):
+def check(study: Study, figure: str) -> list[str]:
     """Re-run :data:`CHECK_CONFIGS` of ``figure`` (every trial) and compare with its ``runs.parquet``.
 
     Returns the differences, one line each; logs one line per configuration ending in

@@ -61,6 +61,11 @@ F_MARGIN = 1e-9     # in decision-function units, relative
 SOC_MARGIN = 1e-12  # percent
 THRESHOLD_MARGIN = 1e-9  # relative, on 100 - SoC (see threshold_gap)
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
+# Ticks of a scan epoch: the bounds of the tick scan are computed (one exp per idle UAV) once per
+# epoch and hold for every window of SCAN_TICKS within it; longer epochs, looser bounds.
+EPOCH_TICKS = 4 * SCAN_TICKS
+# Rows of Fleet.scan_terms.
+SCAN_W_DISTANCE, SCAN_W_MASS, SCAN_OFFSET, SCAN_ABS_INTERCEPT = 0, 1, 2, 3
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
 # Queue position and membership changes, numpy integers for one compiled queued_at and _tree_add
 # (a Python int literal would be a specialisation of its own).
@@ -117,6 +122,7 @@ class Fleet(NamedTuple):
     steps: np.ndarray       # learner step counter (scikit-learn's t_)
     mode: np.ndarray        # int8
     sup: np.ndarray         # (S, K) local supervisor states
+    quiet: np.ndarray       # bool: from its states, notCapableTask is allowed and changes none
     next_s: np.ndarray      # time of the UAV's next event, inf if none; set only through ``schedule``
     event_heap: np.ndarray  # int64: UAV ids in a binary min-heap on (next_s, id), NaN first (see ``schedule``)
     heap_pos: np.ndarray    # int64: where each UAV sits in event_heap
@@ -139,8 +145,15 @@ class Fleet(NamedTuple):
     bidding: np.ndarray     # bool scratch of the auction being resolved
     reach: np.ndarray       # max over queued orders of w_distance x_distance + w_mass x_mass
     reach_stale: np.ndarray  # bool: reach must be recomputed before use
-    x_soc_best: np.ndarray  # scratch of the tick scan: most favourable standardised SoC
-    scan_ids: np.ndarray    # int64 scratch of the tick scan: the idle UAVs
+    # The idle UAVs, packed in no particular order (first counters[N_IDLE]), and where each
+    # sits: the scans that do not depend on id order touch only them.
+    idle_ids: np.ndarray    # int64
+    idle_pos: np.ndarray    # int64, valid for idle UAVs
+    # (4, S): per slot of idle_ids, the terms of the bound on its decision value over the scan
+    # epoch (rows SCAN_W_DISTANCE ..., see _may_bid), contiguous so that the tick scan streams.
+    scan_terms: np.ndarray
+    scan_epoch: np.ndarray  # (2,) [start, end] s of the ticks scan_terms hold for; NaN: none yet
+    bid_ids: np.ndarray     # int64 scratch of an auction: the UAVs it evaluates, ascending
 
 
 class Attempts(NamedTuple):
@@ -185,13 +198,79 @@ def soc_at(fleet, i, t, charge_rate):
 
 
 @njit(cache=True)
-def _step(table, fleet, counters, i, event):
-    """Move UAV ``i``'s supervisor along ``event``; record the refusal and return False if not allowed."""
-    if take(table, fleet.sup, i, event):
+def _step(table, sup, quiet, counters, i, event):
+    """Move UAV ``i``'s supervisor along ``event``; record the refusal and return False if not allowed.
+
+    ``sup`` and ``quiet`` are the Fleet's: arrays, not the whole Fleet, which a call that is
+    not inlined would copy onto the stack.
+    """
+    if event == EV_NOT_CAPABLE and quiet[i]:
+        return True  # allowed, and a self-loop of every local supervisor
+    if take(table, sup, i, event):
+        loops = True
+        for k in range(table.shape[0]):
+            loops = loops and table[k, sup[i, k], EV_NOT_CAPABLE] == sup[i, k]
+        quiet[i] = loops
         return True
     counters[REFUSED_UAV] = i
     counters[REFUSED_EVENT] = event
     return False
+
+
+@njit(cache=True)
+def _scan_terms(terms, k, coef, intercept, soc_ref, t_ref, epoch, params, i):
+    """Fill slot ``k`` of ``terms`` (Fleet.scan_terms) for idle UAV ``i`` and the scan epoch ``epoch``.
+
+    SoC only grows while charging, so over the epoch's ticks the most favourable SoC is at
+    its end if f grows with SoC (SoC 100, t = inf, for a UAV that may reserve) and at its
+    start (or the landing, if later) otherwise; SOC_MARGIN covers the rounding of ``exp``.
+    """
+    if coef[i, 2] > 0.0:
+        t_best = np.inf if params.reserves else epoch[1]
+    else:
+        t_best = max(epoch[0], t_ref[i])
+    soc = soc_after_charging(soc_ref[i], t_best - t_ref[i], params.charge_rate)
+    terms[SCAN_W_DISTANCE, k] = coef[i, 0]
+    terms[SCAN_W_MASS, k] = coef[i, 1]
+    terms[SCAN_OFFSET, k] = intercept[i] + coef[i, 2] * ((soc + SOC_MARGIN - params.soc_mean) / params.soc_std)
+    terms[SCAN_ABS_INTERCEPT, k] = abs(intercept[i])
+
+
+@njit(cache=True)
+def _may_bid(terms, k, x_distance, x_mass):
+    """Whether the idle UAV in slot ``k`` may have f >= 0 for the order at some tick of the scan epoch.
+
+    An upper bound of f (its SoC term at the most favourable SoC), with a margin (F_MARGIN)
+    far above the rounding by which it and the exact decision value differ.
+    """
+    value = terms[SCAN_W_DISTANCE, k] * x_distance + terms[SCAN_W_MASS, k] * x_mass
+    return value + terms[SCAN_OFFSET, k] >= -F_MARGIN * (1.0 + abs(value) + terms[SCAN_ABS_INTERCEPT, k])
+
+
+@njit(cache=True)
+def _become_idle(fleet, counters, params, i):
+    """UAV ``i`` has landed (and learned): it joins the packed idle set."""
+    n_idle = counters[N_IDLE]
+    fleet.mode[i] = IDLE
+    fleet.idle_ids[n_idle] = i
+    fleet.idle_pos[i] = n_idle
+    counters[N_IDLE] = n_idle + 1
+    _scan_terms(fleet.scan_terms, n_idle, fleet.coef, fleet.intercept, fleet.soc_ref, fleet.t_ref,
+                fleet.scan_epoch, params, i)
+
+
+@njit(cache=True)
+def _leave_idle(fleet, counters, i):
+    """UAV ``i`` (idle) won an auction: the last of the packed idle set moves to its slot."""
+    last = counters[N_IDLE] - 1
+    moved = fleet.idle_ids[last]
+    k = fleet.idle_pos[i]
+    fleet.idle_ids[k] = moved
+    fleet.idle_pos[moved] = k
+    terms = fleet.scan_terms
+    for row in range(terms.shape[0]):
+        terms[row, k] = terms[row, last]
+    counters[N_IDLE] = last
 
 
 @njit(cache=True)
@@ -379,9 +458,8 @@ def _earliest_bid(book, fleet, counters, params, t):
     """
     earliest = np.inf
     theta_gap = threshold_gap(params.theta)
-    for i in range(fleet.mode.shape[0]):
-        if fleet.mode[i] != IDLE:
-            continue
+    for k in range(counters[N_IDLE]):
+        i = fleet.idle_ids[k]
         soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
         if params.bids_on == BIDS_ON_SOC_THRESHOLD:
             if soc >= params.theta:
@@ -424,29 +502,23 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     """The first tick before tick ``end_max`` (and within SCAN_TICKS) whose order some idle UAV may bid on.
 
     Only for rules that bid on their policy. Over the scanned ticks each idle UAV's
-    decision value for an order is at most its value at the most favourable SoC of the
-    window (the end if f grows with SoC, the start otherwise; SoC 100 if it may reserve),
+    decision value for an order is at most its bound over the scan epoch (:func:`_may_bid`),
     so an order for which that bound is negative for everyone has no bidder at its tick.
+    A window past the epoch starts a new one at ``t_tick``.
     Returns the index of the first tick that may have one, or of the tick after the window.
     """
     interval = params.advert_interval_s
     tick = counters[NEXT_TICK]
     end = min(end_max, tick + SCAN_TICKS)
-    t_end = end * interval  # after every scanned tick
-    # Charging drives SoC up to 100 (t = inf), where a UAV that may reserve is keenest.
-    t_keenest = np.inf if params.reserves else t_end
-    coef = fleet.coef
-    intercept = fleet.intercept
-    x_soc_best = fleet.x_soc_best
-    idle = fleet.scan_ids  # the idle UAVs, packed: the scan below touches only them
-    n_idle = 0
-    for i in range(fleet.mode.shape[0]):
-        if fleet.mode[i] == IDLE:
-            t_best = t_keenest if coef[i, 2] > 0.0 else t_tick
-            soc = soc_after_charging(fleet.soc_ref[i], t_best - fleet.t_ref[i], params.charge_rate)
-            x_soc_best[i] = (soc + SOC_MARGIN - params.soc_mean) / params.soc_std
-            idle[n_idle] = i
-            n_idle += 1
+    n_idle = counters[N_IDLE]
+    epoch = fleet.scan_epoch
+    if not end * interval <= epoch[1]:  # after every scanned tick
+        epoch[0] = t_tick
+        epoch[1] = t_tick + EPOCH_TICKS * interval
+        for k in range(n_idle):
+            _scan_terms(fleet.scan_terms, k, fleet.coef, fleet.intercept, fleet.soc_ref, fleet.t_ref, epoch, params,
+                        fleet.idle_ids[k])
+    terms = fleet.scan_terms
     tree = book.queue_tree
     link = book.queue_next
     x_distance = book.x_distance
@@ -455,12 +527,11 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     for j in range(end - tick):
         x0 = x_distance[order]
         x1 = x_mass[order]
-        for k in range(n_idle):
-            i = idle[k]
-            value = _order_value(coef, i, x0, x1)
-            f = value + intercept[i] + coef[i, 2] * x_soc_best[i]
-            if f >= -F_MARGIN * (1.0 + abs(value) + abs(intercept[i])):
-                return tick + j
+        anyone = False
+        for k in range(n_idle):  # no early exit: a branch-free loop the compiler can vectorise
+            anyone |= _may_bid(terms, k, x0, x1)
+        if anyone:
+            return tick + j
         order = link[order]
         if order < 0:  # past the newest: round again from the oldest
             order = queued_at(tree, OLDEST)
@@ -544,7 +615,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
     row = fleet.attempt[i]
     order = fleet.order[i]
     if fleet.mode[i] == RESERVED:
-        if not _step(table, fleet, counters, i, EV_DELIVER):
+        if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_DELIVER):
             return False
         counters[N_RESERVED] -= 1
         _takeoff(book, fleet, attempts, counters, params, i, order, t,
@@ -559,7 +630,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         else:
             attempts.outcome[row] = OUTCOME_ABORTED
             counters[N_ABORTED] += 1
-        if not _step(table, fleet, counters, i, EV_COND_RETURN):
+        if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_COND_RETURN):
             return False
         fleet.mode[i] = RETURNING
         schedule(fleet, i, t + fleet.home_s[i])
@@ -576,13 +647,11 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         if not fleet.delivers[i]:
             _enqueue(book, fleet, counters, order)
         return True
-    if not _step(table, fleet, counters, i, EV_RETURN):
+    if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_RETURN):
         return False
     attempts.return_soc[row] = fleet.land_soc[i]
-    fleet.mode[i] = IDLE
     fleet.soc_ref[i] = fleet.land_soc[i]
     fleet.t_ref[i] = t
-    counters[N_IDLE] += 1
     if not fleet.delivers[i]:
         _enqueue(book, fleet, counters, order)
     # One partial_fit step on what the UAV saw at takeoff and what happened.
@@ -591,6 +660,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
              (fleet.takeoff_soc[i] - params.soc_mean) / params.soc_std,
              1.0 if fleet.delivers[i] else 0.0, params.alpha, params.t0)
     fleet.reach_stale[i] = True
+    _become_idle(fleet, counters, params, i)
     return True
 
 
@@ -646,16 +716,42 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
             if wait < np.inf and decision(fleet.coef, fleet.intercept, i, x0, x1, x_full) < 0.0:
                 wait = np.inf
         if wait == np.inf:
-            if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
+            if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_NOT_CAPABLE):
                 return True, -1, np.inf
             continue
-        if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
+        if not (_step(table, fleet.sup, fleet.quiet, counters, i, EV_CAPABLE)
+                and _step(table, fleet.sup, fleet.quiet, counters, i, EV_BID)):
             return True, -1, np.inf
         fleet.bidding[i] = True
         if wait <= best_wait:  # ascending ids: ties go to the highest id
             best_wait = wait
             reserver = i
     return False, reserver, best_wait
+
+
+@njit(cache=True)
+def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
+    """Put the idle UAVs an auction must evaluate into ``fleet.bid_ids``, ascending; return how many.
+
+    All idle UAVs, or with ``bounded`` (a rule that bids on its policy, bounds that hold now,
+    no reservations) only those that may bid (:func:`_may_bid`) or whose notCapableTask
+    step is not a silent self-loop: for the others the auction changes nothing.
+    """
+    ids = fleet.bid_ids
+    n = 0
+    if bounded:
+        for k in range(counters[N_IDLE]):
+            i = fleet.idle_ids[k]
+            if not fleet.quiet[i] or _may_bid(fleet.scan_terms, k, x_distance, x_mass):
+                ids[n] = i
+                n += 1
+        ids[:n].sort()
+    else:
+        for i in range(fleet.mode.shape[0]):
+            if fleet.mode[i] == IDLE:
+                ids[n] = i
+                n += 1
+    return n
 
 
 @njit(cache=True)
@@ -676,27 +772,33 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     winner = -1
     winner_soc = 0.0
     best = -np.inf
-    n_uavs = fleet.mode.shape[0]
     bidder = fleet.bidding
     # Arrays bound once, and weights read by index: no array views made per UAV in this loop.
-    mode = fleet.mode
     coef = fleet.coef
     soc_ref = fleet.soc_ref
     t_ref = fleet.t_ref
-    for i in range(n_uavs):
+    # A rule that bids on its policy cannot bid where the tick scan's bound rules it out: no
+    # SoC (exp) and decision then for that UAV.
+    bounded = params.bids_on == BIDS_ON_POLICY and fleet.scan_epoch[0] <= t <= fleet.scan_epoch[1]
+    uavs = fleet.bid_ids
+    n_evaluated = _auction_uavs(fleet, counters, x0, x1, bounded and not params.reserves)
+    for j in range(n_evaluated):
+        i = uavs[j]
         bidder[i] = False
-        if mode[i] != IDLE:
-            continue
-        soc = soc_after_charging(soc_ref[i], t - t_ref[i], params.charge_rate)
-        f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
-        w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
-        bids, score = bid(params.rule, rule_kernel, f, w_norm, soc, params.theta, rng)
+        if bounded and not _may_bid(fleet.scan_terms, fleet.idle_pos[i], x0, x1):
+            bids = False
+        else:
+            soc = soc_after_charging(soc_ref[i], t - t_ref[i], params.charge_rate)
+            f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
+            w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
+            bids, score = bid(params.rule, rule_kernel, f, w_norm, soc, params.theta, rng)
         if not bids:
             # With reservations the UAV's step waits for the second phase.
-            if not params.reserves and not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
+            if not params.reserves and not _step(table, fleet.sup, fleet.quiet, counters, i, EV_NOT_CAPABLE):
                 return False
             continue
-        if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
+        if not (_step(table, fleet.sup, fleet.quiet, counters, i, EV_CAPABLE)
+                and _step(table, fleet.sup, fleet.quiet, counters, i, EV_BID)):
             return False
         bidder[i] = True
         if score >= best:  # ascending ids: ties go to the highest id
@@ -714,16 +816,17 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     if winner < 0:
         counters[LAST_ADVERTISED] = order
         return True
-    for i in range(n_uavs):
-        if bidder[i] and i != winner and not _step(table, fleet, counters, i, EV_LOST_BID):
+    for j in range(n_evaluated):
+        i = uavs[j]
+        if bidder[i] and i != winner and not _step(table, fleet.sup, fleet.quiet, counters, i, EV_LOST_BID):
             return False
-    if not _step(table, fleet, counters, winner, EV_WON):
+    if not _step(table, fleet.sup, fleet.quiet, counters, winner, EV_WON):
         return False
     # Allocated: out of the queue, and the next advertisement starts again from the oldest.
     _dequeue(book, fleet, counters, pos)
     counters[LAST_ADVERTISED] = -1
     counters[MAY_BID] = 0
-    counters[N_IDLE] -= 1
+    _leave_idle(fleet, counters, winner)
     fleet.allocated_s[winner] = t
     if reserved:
         # Stays at the FC, charging, in the supervisor's state after wonBid until takeoff.
@@ -734,7 +837,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
         counters[N_RESERVED] += 1
         counters[N_RESERVATIONS] += 1
         return True
-    if not _step(table, fleet, counters, winner, EV_DELIVER):
+    if not _step(table, fleet.sup, fleet.quiet, counters, winner, EV_DELIVER):
         return False
     fleet.forecast_wait_s[winner] = np.nan
     _takeoff(book, fleet, attempts, counters, params, winner, order, t, winner_soc)

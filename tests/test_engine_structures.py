@@ -132,15 +132,24 @@ def _paused_states(rule, n_uavs=60, hours=36, every_s=1800.0):
 
 
 @pytest.mark.parametrize("rule", ["least_confident", "reservation"])
-def test_packed_idle_set_and_quiet_flags_follow_the_fleet(rule):
+def test_packed_idle_set_and_supervisor_flags_follow_the_fleet(rule):
     for state, _ in _paused_states(rule):
         fleet, n_idle = state.fleet, int(state.counters[engine.N_IDLE])
         packed = fleet.idle_ids[:n_idle]
         assert sorted(packed.tolist()) == np.flatnonzero(fleet.mode == engine.IDLE).tolist()
         assert np.array_equal(fleet.idle_pos[packed], np.arange(n_idle))
-        # quiet: notCapableTask is allowed and loops on every local supervisor's state.
-        loops = state.table[np.arange(fleet.sup.shape[1]), fleet.sup, engine.EV_NOT_CAPABLE] == fleet.sup
+        # quiet: notCapableTask is allowed and loops on every local supervisor's state; bid_silent:
+        # capableTask, bid and lostBid are allowed in turn and come back to it.
+        table, supervisors = state.table, np.arange(fleet.sup.shape[1])
+        loops = table[supervisors, fleet.sup, engine.EV_NOT_CAPABLE] == fleet.sup
         assert np.array_equal(fleet.quiet, loops.all(axis=1))
+        silent = []
+        for states in fleet.sup:
+            capable = table[supervisors, states, engine.EV_CAPABLE]
+            bidding = table[supervisors, capable, engine.EV_BID]
+            silent.append(bool(np.all((capable >= 0) & (bidding >= 0)
+                                      & (table[supervisors, bidding, engine.EV_LOST_BID] == states))))
+        assert fleet.bid_silent.tolist() == silent
 
 
 @pytest.mark.parametrize("rule", ["least_confident", "reservation"])

@@ -52,6 +52,10 @@ DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED, INVALID_STATE = 0, 1, 2, 3
  N_IDLE, N_LOST, N_AUCTIONS, MAY_BID, REFUSED_UAV, REFUSED_EVENT, N_RESERVED, N_RESERVATIONS,
  N_COUNTERS) = range(17)
 
+# Values of Fleet.bidding: no bid; a bid whose capableTask and bid steps were taken; a bid of
+# a bid_silent UAV, whose steps are taken only if it wins.
+NO_BID, BID_STEPPED, BID_SILENT = np.int8(0), np.int8(1), np.int8(2)
+
 # Values of Params.bids_on (auction.BIDS_ON).
 BIDS_ON_POLICY, BIDS_ON_SOC_THRESHOLD, BIDS_ON_ANY = 0, 1, 2
 
@@ -64,6 +68,9 @@ SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some o
 # Ticks of a scan epoch: the bounds of the tick scan are computed (one exp per idle UAV) once per
 # epoch and hold for every window of SCAN_TICKS within it; longer epochs, looser bounds.
 EPOCH_TICKS = 4 * SCAN_TICKS
+# An auction sorts the UAVs it evaluates into id order if they are at most 1/SORT_FRACTION of
+# the fleet, and otherwise picks them out in a pass over the fleet (cheaper than sorting many).
+SORT_FRACTION = 16
 # Rows of Fleet.scan_terms.
 SCAN_W_DISTANCE, SCAN_W_MASS, SCAN_OFFSET, SCAN_ABS_INTERCEPT = 0, 1, 2, 3
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
@@ -123,6 +130,9 @@ class Fleet(NamedTuple):
     mode: np.ndarray        # int8
     sup: np.ndarray         # (S, K) local supervisor states
     quiet: np.ndarray       # bool: from its states, notCapableTask is allowed and changes none
+    # bool: from its states, capableTask and bid are allowed and a lostBid after them brings
+    # every local supervisor back: a losing bid changes nothing, and needs no steps.
+    bid_silent: np.ndarray
     next_s: np.ndarray      # time of the UAV's next event, inf if none; set only through ``schedule``
     event_heap: np.ndarray  # int64: UAV ids in a binary min-heap on (next_s, id), NaN first (see ``schedule``)
     heap_pos: np.ndarray    # int64: where each UAV sits in event_heap
@@ -142,7 +152,7 @@ class Fleet(NamedTuple):
     lost: np.ndarray        # bool: this flight ends in a loss
     allocated_s: np.ndarray  # when the order being flown (or reserved) was allocated
     forecast_wait_s: np.ndarray  # the winning reservation bid, nan if allocated immediately
-    bidding: np.ndarray     # bool scratch of the auction being resolved
+    bidding: np.ndarray     # int8 scratch of the auction being resolved: NO_BID, BID_STEPPED or BID_SILENT
     reach: np.ndarray       # max over queued orders of w_distance x_distance + w_mass x_mass
     reach_stale: np.ndarray  # bool: reach must be recomputed before use
     # The idle UAVs, packed in no particular order (first counters[N_IDLE]), and where each
@@ -198,19 +208,25 @@ def soc_at(fleet, i, t, charge_rate):
 
 
 @njit(cache=True)
-def _step(table, sup, quiet, counters, i, event):
+def _step(table, sup, quiet, bid_silent, counters, i, event):
     """Move UAV ``i``'s supervisor along ``event``; record the refusal and return False if not allowed.
 
-    ``sup`` and ``quiet`` are the Fleet's: arrays, not the whole Fleet, which a call that is
-    not inlined would copy onto the stack.
+    ``sup``, ``quiet`` and ``bid_silent`` are the Fleet's (kept up to date here): arrays, not
+    the whole Fleet, which a call that is not inlined would copy onto the stack.
     """
     if event == EV_NOT_CAPABLE and quiet[i]:
         return True  # allowed, and a self-loop of every local supervisor
     if take(table, sup, i, event):
         loops = True
+        silent = True
         for k in range(table.shape[0]):
-            loops = loops and table[k, sup[i, k], EV_NOT_CAPABLE] == sup[i, k]
+            state = sup[i, k]
+            loops = loops and table[k, state, EV_NOT_CAPABLE] == state
+            capable = table[k, state, EV_CAPABLE]
+            bidding = table[k, capable, EV_BID] if capable >= 0 else -1
+            silent = silent and bidding >= 0 and table[k, bidding, EV_LOST_BID] == state
         quiet[i] = loops
+        bid_silent[i] = silent
         return True
     counters[REFUSED_UAV] = i
     counters[REFUSED_EVENT] = event
@@ -615,7 +631,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
     row = fleet.attempt[i]
     order = fleet.order[i]
     if fleet.mode[i] == RESERVED:
-        if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_DELIVER):
+        if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_DELIVER):
             return False
         counters[N_RESERVED] -= 1
         _takeoff(book, fleet, attempts, counters, params, i, order, t,
@@ -630,7 +646,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         else:
             attempts.outcome[row] = OUTCOME_ABORTED
             counters[N_ABORTED] += 1
-        if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_COND_RETURN):
+        if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_COND_RETURN):
             return False
         fleet.mode[i] = RETURNING
         schedule(fleet, i, t + fleet.home_s[i])
@@ -647,7 +663,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         if not fleet.delivers[i]:
             _enqueue(book, fleet, counters, order)
         return True
-    if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_RETURN):
+    if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_RETURN):
         return False
     attempts.return_soc[row] = fleet.land_soc[i]
     fleet.soc_ref[i] = fleet.land_soc[i]
@@ -716,13 +732,13 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
             if wait < np.inf and decision(fleet.coef, fleet.intercept, i, x0, x1, x_full) < 0.0:
                 wait = np.inf
         if wait == np.inf:
-            if not _step(table, fleet.sup, fleet.quiet, counters, i, EV_NOT_CAPABLE):
+            if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_NOT_CAPABLE):
                 return True, -1, np.inf
             continue
-        if not (_step(table, fleet.sup, fleet.quiet, counters, i, EV_CAPABLE)
-                and _step(table, fleet.sup, fleet.quiet, counters, i, EV_BID)):
+        if not (_step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_CAPABLE)
+                and _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_BID)):
             return True, -1, np.inf
-        fleet.bidding[i] = True
+        fleet.bidding[i] = BID_STEPPED
         if wait <= best_wait:  # ascending ids: ties go to the highest id
             best_wait = wait
             reserver = i
@@ -738,6 +754,7 @@ def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
     step is not a silent self-loop: for the others the auction changes nothing.
     """
     ids = fleet.bid_ids
+    n_uavs = fleet.mode.shape[0]
     n = 0
     if bounded:
         for k in range(counters[N_IDLE]):
@@ -745,12 +762,16 @@ def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
             if not fleet.quiet[i] or _may_bid(fleet.scan_terms, k, x_distance, x_mass):
                 ids[n] = i
                 n += 1
-        ids[:n].sort()
-    else:
-        for i in range(fleet.mode.shape[0]):
-            if fleet.mode[i] == IDLE:
-                ids[n] = i
-                n += 1
+        if n * SORT_FRACTION <= n_uavs:
+            ids[:n].sort()
+            return n
+    # Many, or all: in id order by a pass over the fleet.
+    n = 0
+    for i in range(n_uavs):
+        if fleet.mode[i] == IDLE and (not bounded or not fleet.quiet[i]
+                                      or _may_bid(fleet.scan_terms, fleet.idle_pos[i], x_distance, x_mass)):
+            ids[n] = i
+            n += 1
     return n
 
 
@@ -784,7 +805,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     n_evaluated = _auction_uavs(fleet, counters, x0, x1, bounded and not params.reserves)
     for j in range(n_evaluated):
         i = uavs[j]
-        bidder[i] = False
+        bidder[i] = NO_BID
         if bounded and not _may_bid(fleet.scan_terms, fleet.idle_pos[i], x0, x1):
             bids = False
         else:
@@ -794,13 +815,17 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
             bids, score = bid(params.rule, rule_kernel, f, w_norm, soc, params.theta, rng)
         if not bids:
             # With reservations the UAV's step waits for the second phase.
-            if not params.reserves and not _step(table, fleet.sup, fleet.quiet, counters, i, EV_NOT_CAPABLE):
+            if (not params.reserves and not fleet.quiet[i]
+                    and not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_NOT_CAPABLE)):
                 return False
             continue
-        if not (_step(table, fleet.sup, fleet.quiet, counters, i, EV_CAPABLE)
-                and _step(table, fleet.sup, fleet.quiet, counters, i, EV_BID)):
+        if fleet.bid_silent[i]:
+            bidder[i] = BID_SILENT
+        elif (_step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_CAPABLE)
+                and _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_BID)):
+            bidder[i] = BID_STEPPED
+        else:
             return False
-        bidder[i] = True
         if score >= best:  # ascending ids: ties go to the highest id
             best = score
             winner = i
@@ -818,9 +843,13 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
         return True
     for j in range(n_evaluated):
         i = uavs[j]
-        if bidder[i] and i != winner and not _step(table, fleet.sup, fleet.quiet, counters, i, EV_LOST_BID):
+        if (bidder[i] == BID_STEPPED and i != winner
+                and not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_LOST_BID)):
             return False
-    if not _step(table, fleet.sup, fleet.quiet, counters, winner, EV_WON):
+    if bidder[winner] == BID_SILENT:  # its bid's steps, allowed (bid_silent), then the win
+        _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_CAPABLE)
+        _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_BID)
+    if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_WON):
         return False
     # Allocated: out of the queue, and the next advertisement starts again from the oldest.
     _dequeue(book, fleet, counters, pos)
@@ -837,7 +866,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
         counters[N_RESERVED] += 1
         counters[N_RESERVATIONS] += 1
         return True
-    if not _step(table, fleet.sup, fleet.quiet, counters, winner, EV_DELIVER):
+    if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_DELIVER):
         return False
     fleet.forecast_wait_s[winner] = np.nan
     _takeoff(book, fleet, attempts, counters, params, winner, order, t, winner_soc)

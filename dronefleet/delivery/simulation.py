@@ -132,7 +132,11 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
     table = automaton.transition_table(engine.EVENT_NAMES)
     bids_on = BIDS_ON[rule.bids_on]
     idle = automaton.init_state
-    quiet = bool(np.all(table[np.arange(idle.shape[0]), idle, engine.EV_NOT_CAPABLE] == idle))
+    supervisors = np.arange(idle.shape[0])
+    quiet = bool(np.all(table[supervisors, idle, engine.EV_NOT_CAPABLE] == idle))
+    capable = table[supervisors, idle, engine.EV_CAPABLE]
+    bidding = np.where(capable >= 0, table[supervisors, capable, engine.EV_BID], -1)
+    bid_silent = bool(np.all((bidding >= 0) & (table[supervisors, bidding, engine.EV_LOST_BID] == idle)))
     if not quiet:
         # Skipped ticks do not step notCapableTask; that is exact only if it is a self-loop.
         bids_on = BIDS_ON["any"]
@@ -148,13 +152,14 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
         soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,
         mode=np.where(lost, engine.LOST, engine.IDLE).astype(np.int8),
         sup=np.tile(automaton.init_state.astype(np.int64), (s, 1)), quiet=np.full(s, quiet),
+        bid_silent=np.full(s, bid_silent),
         next_s=np.full(s, np.inf), event_heap=np.arange(s, dtype=np.int64),
         heap_pos=np.arange(s, dtype=np.int64), soc_ref=soc.astype(np.float64), t_ref=np.zeros(s),
         order=np.full(s, -1, np.int64), attempt=np.full(s, -1, np.int64),
         takeoff_s=np.zeros(s), takeoff_soc=np.zeros(s), rate_out=np.zeros(s), turn_s=np.zeros(s),
         turn_soc=np.zeros(s), rate_home=np.zeros(s), home_s=np.zeros(s), land_soc=np.zeros(s),
         delivers=np.zeros(s, np.bool_), lost=np.zeros(s, np.bool_), allocated_s=np.zeros(s),
-        forecast_wait_s=np.full(s, np.nan), bidding=np.zeros(s, np.bool_),
+        forecast_wait_s=np.full(s, np.nan), bidding=np.zeros(s, np.int8),
         reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), idle_ids=idle_ids,
         idle_pos=np.argsort(idle_ids).astype(np.int64), scan_terms=np.zeros((4, s)), scan_epoch=np.full(2, np.nan),
         bid_ids=np.zeros(s, np.int64))

@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, types
 
-from .auction import RULE_SIGNATURE, bid, reservation_wait
+from .auction import RULE_SIGNATURE, RULES, bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
 from ..fpmath import log
 from .policy import decision, sgd_step
@@ -68,11 +68,16 @@ SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some o
 # Ticks of a scan epoch: the bounds of the tick scan are computed (one exp per idle UAV) once per
 # epoch and hold for every window of SCAN_TICKS within it; longer epochs, looser bounds.
 EPOCH_TICKS = 4 * SCAN_TICKS
-# An auction sorts the UAVs it evaluates into id order if they are at most 1/SORT_FRACTION of
-# the fleet, and otherwise picks them out in a pass over the fleet (cheaper than sorting many).
+# An auction picks the UAVs it evaluates from the packed idle set and sorts them into id order
+# if the idle UAVs are at most 1/SORT_FRACTION of the fleet, and otherwise in one pass over the
+# fleet (cheaper than sorting many).
 SORT_FRACTION = 16
-# Rows of Fleet.scan_terms.
-SCAN_W_DISTANCE, SCAN_W_MASS, SCAN_OFFSET, SCAN_ABS_INTERCEPT = 0, 1, 2, 3
+# Rows of Fleet.scan_terms: the order weights, the rest of f at the most favourable SoC of the
+# epoch (an upper bound) and at the least favourable (a lower bound), |b| (for the margin) and ||w||.
+SCAN_W_DISTANCE, SCAN_W_MASS, SCAN_OFFSET, SCAN_OFFSET_LOW, SCAN_ABS_INTERCEPT, SCAN_W_NORM, N_SCAN_ROWS = range(7)
+# Rules whose score is the confidence f / ||w|| (negated for least_confident): an auction
+# evaluates exactly only the bidders whose bounds of it may reach the best one.
+LEAST_CONFIDENT, MOST_CONFIDENT = RULES["least_confident"].code, RULES["most_confident"].code
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
 # Queue position and membership changes, numpy integers for one compiled queued_at and _tree_add
 # (a Python int literal would be a specialisation of its own).
@@ -159,8 +164,8 @@ class Fleet(NamedTuple):
     # sits: the scans that do not depend on id order touch only them.
     idle_ids: np.ndarray    # int64
     idle_pos: np.ndarray    # int64, valid for idle UAVs
-    # (4, S): per slot of idle_ids, the terms of the bound on its decision value over the scan
-    # epoch (rows SCAN_W_DISTANCE ..., see _may_bid), contiguous so that the tick scan streams.
+    # (N_SCAN_ROWS, S): per slot of idle_ids, the terms of the bounds on its decision value over
+    # the scan epoch (rows SCAN_W_DISTANCE ..., see _may_bid), contiguous so that the tick scan streams.
     scan_terms: np.ndarray
     scan_epoch: np.ndarray  # (2,) [start, end] s of the ticks scan_terms hold for; NaN: none yet
     bid_ids: np.ndarray     # int64 scratch of an auction: the UAVs it evaluates, ascending
@@ -239,17 +244,22 @@ def _scan_terms(terms, k, coef, intercept, soc_ref, t_ref, epoch, params, i):
 
     SoC only grows while charging, so over the epoch's ticks the most favourable SoC is at
     its end if f grows with SoC (SoC 100, t = inf, for a UAV that may reserve) and at its
-    start (or the landing, if later) otherwise; SOC_MARGIN covers the rounding of ``exp``.
+    start (or the landing, if later) otherwise, and the least favourable at the other end;
+    SOC_MARGIN covers the rounding of ``exp``.
     """
+    t_start = max(epoch[0], t_ref[i])
     if coef[i, 2] > 0.0:
-        t_best = np.inf if params.reserves else epoch[1]
+        t_best, t_worst = np.inf if params.reserves else epoch[1], t_start
     else:
-        t_best = max(epoch[0], t_ref[i])
-    soc = soc_after_charging(soc_ref[i], t_best - t_ref[i], params.charge_rate)
+        t_best, t_worst = t_start, epoch[1]
+    best = soc_after_charging(soc_ref[i], t_best - t_ref[i], params.charge_rate)
+    worst = soc_after_charging(soc_ref[i], t_worst - t_ref[i], params.charge_rate)
     terms[SCAN_W_DISTANCE, k] = coef[i, 0]
     terms[SCAN_W_MASS, k] = coef[i, 1]
-    terms[SCAN_OFFSET, k] = intercept[i] + coef[i, 2] * ((soc + SOC_MARGIN - params.soc_mean) / params.soc_std)
+    terms[SCAN_OFFSET, k] = intercept[i] + coef[i, 2] * ((best + SOC_MARGIN - params.soc_mean) / params.soc_std)
+    terms[SCAN_OFFSET_LOW, k] = intercept[i] + coef[i, 2] * ((worst - SOC_MARGIN - params.soc_mean) / params.soc_std)
     terms[SCAN_ABS_INTERCEPT, k] = abs(intercept[i])
+    terms[SCAN_W_NORM, k] = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
 
 
 @njit(cache=True)
@@ -261,6 +271,41 @@ def _may_bid(terms, k, x_distance, x_mass):
     """
     value = terms[SCAN_W_DISTANCE, k] * x_distance + terms[SCAN_W_MASS, k] * x_mass
     return value + terms[SCAN_OFFSET, k] >= -F_MARGIN * (1.0 + abs(value) + terms[SCAN_ABS_INTERCEPT, k])
+
+
+@njit(cache=True)
+def _decision_bounds(terms, k, x_distance, x_mass):
+    """(lower, upper) bounds of the decision value of the idle UAV in slot ``k`` for the order at any tick of the epoch.
+
+    Wider than the exact range by the margin of :func:`_may_bid` on each side.
+    """
+    value = terms[SCAN_W_DISTANCE, k] * x_distance + terms[SCAN_W_MASS, k] * x_mass
+    margin = F_MARGIN * (1.0 + abs(value) + terms[SCAN_ABS_INTERCEPT, k])
+    return value + terms[SCAN_OFFSET_LOW, k] - margin, value + terms[SCAN_OFFSET, k] + margin
+
+
+@njit(cache=True)
+def _confidence_bounds(terms, k, x_distance, x_mass, most):
+    """(lower, upper) bounds of the score (confidence, or its negation unless ``most``) of slot ``k`` if it bids.
+
+    The lower bound holds only for a UAV that bids for sure (the lower bound of f >= 0).
+    """
+    low, high = _decision_bounds(terms, k, x_distance, x_mass)
+    w_norm = terms[SCAN_W_NORM, k]
+    if most:
+        return low / w_norm, high / w_norm
+    return -(high / w_norm), -(max(low, 0.0) / w_norm)
+
+
+@njit(cache=True)
+def _score_to_beat(fleet, uavs, n, x_distance, x_mass, most):
+    """The highest score that some UAV among ``uavs[:n]`` bids for sure with (-inf if none)."""
+    beat = -np.inf
+    for j in range(n):
+        k = fleet.idle_pos[uavs[j]]
+        if _decision_bounds(fleet.scan_terms, k, x_distance, x_mass)[0] >= 0.0:
+            beat = max(beat, _confidence_bounds(fleet.scan_terms, k, x_distance, x_mass, most)[0])
+    return beat
 
 
 @njit(cache=True)
@@ -756,17 +801,14 @@ def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
     ids = fleet.bid_ids
     n_uavs = fleet.mode.shape[0]
     n = 0
-    if bounded:
+    if bounded and counters[N_IDLE] * SORT_FRACTION <= n_uavs:
         for k in range(counters[N_IDLE]):
             i = fleet.idle_ids[k]
             if not fleet.quiet[i] or _may_bid(fleet.scan_terms, k, x_distance, x_mass):
                 ids[n] = i
                 n += 1
-        if n * SORT_FRACTION <= n_uavs:
-            ids[:n].sort()
-            return n
-    # Many, or all: in id order by a pass over the fleet.
-    n = 0
+        ids[:n].sort()
+        return n
     for i in range(n_uavs):
         if fleet.mode[i] == IDLE and (not bounded or not fleet.quiet[i]
                                       or _may_bid(fleet.scan_terms, fleet.idle_pos[i], x_distance, x_mass)):
@@ -803,9 +845,18 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     bounded = params.bids_on == BIDS_ON_POLICY and fleet.scan_epoch[0] <= t <= fleet.scan_epoch[1]
     uavs = fleet.bid_ids
     n_evaluated = _auction_uavs(fleet, counters, x0, x1, bounded and not params.reserves)
+    # Under a confidence rule, a bidder whose score is certainly below one that some UAV bids
+    # for sure cannot win (nor tie): if its bid and loss change nothing (bid_silent) and its
+    # not bidding neither (quiet), it need not be evaluated at all.
+    confidence = bounded and not params.reserves and (params.rule == LEAST_CONFIDENT or params.rule == MOST_CONFIDENT)
+    most = params.rule == MOST_CONFIDENT
+    beat = _score_to_beat(fleet, uavs, n_evaluated, x0, x1, most) if confidence else -np.inf
     for j in range(n_evaluated):
         i = uavs[j]
         bidder[i] = NO_BID
+        if (confidence and fleet.quiet[i] and fleet.bid_silent[i]
+                and _confidence_bounds(fleet.scan_terms, fleet.idle_pos[i], x0, x1, most)[1] < beat):
+            continue
         if bounded and not _may_bid(fleet.scan_terms, fleet.idle_pos[i], x0, x1):
             bids = False
         else:

@@ -161,7 +161,8 @@ def initial_state(config, supervisor=None, orders=None, soh=None, fleet=None):
         delivers=np.zeros(s, np.bool_), lost=np.zeros(s, np.bool_), allocated_s=np.zeros(s),
         forecast_wait_s=np.full(s, np.nan), bidding=np.zeros(s, np.int8),
         reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), idle_ids=idle_ids,
-        idle_pos=np.argsort(idle_ids).astype(np.int64), scan_terms=np.zeros((4, s)), scan_epoch=np.full(2, np.nan),
+        idle_pos=np.argsort(idle_ids).astype(np.int64), scan_terms=np.zeros((engine.N_SCAN_ROWS, s)),
+        scan_epoch=np.full(2, np.nan),
         bid_ids=np.zeros(s, np.int64))
     n_samples = int(math.floor(config.horizon_s / config.record_interval_s)) + 1
     series = engine.Series(*(np.zeros(n_samples, np.int64) for _ in engine.Series._fields))

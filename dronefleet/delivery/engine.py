@@ -262,7 +262,7 @@ def _scan_terms(terms, k, coef, intercept, soc_ref, t_ref, epoch, params, i):
     terms[SCAN_W_NORM, k] = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _may_bid(terms, k, x_distance, x_mass):
     """Whether the idle UAV in slot ``k`` may have f >= 0 for the order at some tick of the scan epoch.
 
@@ -273,7 +273,7 @@ def _may_bid(terms, k, x_distance, x_mass):
     return value + terms[SCAN_OFFSET, k] >= -F_MARGIN * (1.0 + abs(value) + terms[SCAN_ABS_INTERCEPT, k])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _decision_bounds(terms, k, x_distance, x_mass):
     """(lower, upper) bounds of the decision value of the idle UAV in slot ``k`` for the order at any tick of the epoch.
 
@@ -284,7 +284,7 @@ def _decision_bounds(terms, k, x_distance, x_mass):
     return value + terms[SCAN_OFFSET_LOW, k] - margin, value + terms[SCAN_OFFSET, k] + margin
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _confidence_bounds(terms, k, x_distance, x_mass, most):
     """(lower, upper) bounds of the score (confidence, or its negation unless ``most``) of slot ``k`` if it bids.
 

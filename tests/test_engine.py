@@ -406,6 +406,36 @@ def test_tick_skip_is_off_when_the_idle_state_does_not_loop_on_not_capable(tmp_p
     assert simulation.initial_state(c, supervisor=path).params.bids_on == engine.BIDS_ON_ANY
 
 
+def _controller_with_a_twin_of_s0(path):
+    """The packaged controller with S6, a copy of S0 that a lost bid leads to (and S6 to itself).
+
+    It allows the same event sequences, so runs are the same; but a losing bid from S0 changes
+    the state (to S6), so the engine must take its steps, while from S6 it need not.
+    """
+    doc = yaml.safe_load(Path(BUILTIN_CONTROLLER).read_text())
+    data, states, i = doc["sup_data"], [], 0
+    while i < len(data):
+        states.append([data[j:j + 3] for j in range(i + 1, i + 1 + 3 * data[i], 3)])
+        i += 1 + 3 * data[i]
+    assert ["EV_lostBid", 0, 0] in states[2]
+    states[2] = [["EV_lostBid", 0, 6] if t == ["EV_lostBid", 0, 0] else t for t in states[2]]
+    states.append([[event, 0, 6 if target == 0 else target] for event, _, target in states[0]])
+    doc["sup_data"] = [x for triples in states for x in [len(triples)] + [y for t in triples for y in t]]
+    path.write_text(yaml.safe_dump(doc, default_flow_style=None))
+    return path
+
+
+@pytest.mark.parametrize("rule", ["least_confident", "random", "reservation"])
+def test_losing_bids_that_change_the_supervisor_state_give_the_same_run(tmp_path, rule):
+    path = _controller_with_a_twin_of_s0(tmp_path / "twin.yaml")
+    c = cfg.replace(cfg.default_config(), horizon_weeks=1.0, n_uavs=25, rule=rule, seed=2)
+    twin = simulation.initial_state(c, supervisor=path)
+    assert not twin.fleet.bid_silent.any() and twin.fleet.quiet.all()
+    runs = [delivery_records.tables(simulation.simulate(c, supervisor=s)) for s in (None, path)]
+    for name in ("orders", "attempts", "fleet", "timeseries"):
+        assert runs[0][name].equals(runs[1][name]), name
+
+
 @pytest.mark.parametrize("xi,n_uavs", [(0.5, 25), (0.3, 25)])
 def test_supervisor_state_matches_mode(xi, n_uavs):
     c = cfg.replace(cfg.default_config(), horizon_weeks=1.0, xi=xi, n_uavs=n_uavs, seed=5)

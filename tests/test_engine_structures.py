@@ -119,3 +119,65 @@ def test_a_large_fleet_run_is_bit_identical_to_the_array_engine(rule):
     config = replace(default_config(), n_uavs=300, horizon_weeks=2 / 7, tau_minutes=15.0 * 25 / 300, rule=rule, seed=3)
     digests = {name: table_digest(table) for name, table in tables(simulation.simulate(config)).items()}
     assert digests == LARGE_FLEET[rule]
+
+
+def _paused_states(rule, n_uavs=60, hours=36, every_s=1800.0):
+    """A run of a mid-size fleet under ``rule``, yielded at every pause (every ``every_s`` seconds)."""
+    config = replace(default_config(), n_uavs=n_uavs, horizon_weeks=hours / 168, tau_minutes=15.0 * 25 / n_uavs,
+                     rule=rule, seed=5)
+    state = simulation.initial_state(config)
+    for t in np.arange(every_s, config.horizon_s + every_s / 2, every_s):
+        simulation.advance(state, float(t))
+        yield state, float(t)
+
+
+@pytest.mark.parametrize("rule", ["least_confident", "reservation"])
+def test_packed_idle_set_and_supervisor_flags_follow_the_fleet(rule):
+    for state, _ in _paused_states(rule):
+        fleet, n_idle = state.fleet, int(state.counters[engine.N_IDLE])
+        packed = fleet.idle_ids[:n_idle]
+        assert sorted(packed.tolist()) == np.flatnonzero(fleet.mode == engine.IDLE).tolist()
+        assert np.array_equal(fleet.idle_pos[packed], np.arange(n_idle))
+        # quiet: notCapableTask is allowed and loops on every local supervisor's state; bid_silent:
+        # capableTask, bid and lostBid are allowed in turn and come back to it.
+        table, supervisors = state.table, np.arange(fleet.sup.shape[1])
+        loops = table[supervisors, fleet.sup, engine.EV_NOT_CAPABLE] == fleet.sup
+        assert np.array_equal(fleet.quiet, loops.all(axis=1))
+        silent = []
+        for states in fleet.sup:
+            capable = table[supervisors, states, engine.EV_CAPABLE]
+            bidding = table[supervisors, capable, engine.EV_BID]
+            silent.append(bool(np.all((capable >= 0) & (bidding >= 0)
+                                      & (table[supervisors, bidding, engine.EV_LOST_BID] == states))))
+        assert fleet.bid_silent.tolist() == silent
+
+
+@pytest.mark.parametrize("rule", ["least_confident", "reservation"])
+def test_scan_bounds_hold_at_every_tick_of_their_epoch(rule):
+    """An idle UAV's exact decision value at a tick of the scan epoch lies within its bounds; if >= 0, it may bid."""
+    from dronefleet.delivery.energy import soc_after_charging
+    from dronefleet.delivery.policy import decision
+
+    checked = 0
+    for state, t in _paused_states(rule, hours=24, every_s=3600.0):
+        fleet, params, book = state.fleet, state.params, state.book
+        start, end = fleet.scan_epoch
+        if not start <= t <= end:
+            continue
+        ticks = np.arange(engine.first_tick_at_or_after(t, params.advert_interval_s),
+                          np.floor(end / params.advert_interval_s) + 1) * params.advert_interval_s
+        orders = np.arange(book.arrival_s.shape[0])[:100]
+        for k in range(int(state.counters[engine.N_IDLE])):
+            i = fleet.idle_ids[k]
+            for tick in ticks[::7]:
+                soc = soc_after_charging(fleet.soc_ref[i], tick - fleet.t_ref[i], params.charge_rate)
+                x_soc = (soc - params.soc_mean) / params.soc_std
+                for order in orders:
+                    x0, x1 = book.x_distance[order], book.x_mass[order]
+                    f = decision(fleet.coef, fleet.intercept, i, x0, x1, x_soc)
+                    low, high = engine._decision_bounds(fleet.scan_terms, k, x0, x1)
+                    assert low <= f <= high, (i, tick, order)
+                    if f >= 0.0:
+                        checked += 1
+                        assert engine._may_bid(fleet.scan_terms, k, x0, x1), (i, tick, order)
+    assert checked > 500

@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, types
 
-from .auction import RULE_SIGNATURE, bid, reservation_wait
+from .auction import RULE_SIGNATURE, RULES, bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
 from ..fpmath import log
 from .policy import decision, sgd_step
@@ -52,6 +52,10 @@ DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED, INVALID_STATE = 0, 1, 2, 3
  N_IDLE, N_LOST, N_AUCTIONS, MAY_BID, REFUSED_UAV, REFUSED_EVENT, N_RESERVED, N_RESERVATIONS,
  N_COUNTERS) = range(17)
 
+# Values of Fleet.bidding: no bid; a bid whose capableTask and bid steps were taken; a bid of
+# a bid_silent UAV, whose steps are taken only if it wins.
+NO_BID, BID_STEPPED, BID_SILENT = np.int8(0), np.int8(1), np.int8(2)
+
 # Values of Params.bids_on (auction.BIDS_ON).
 BIDS_ON_POLICY, BIDS_ON_SOC_THRESHOLD, BIDS_ON_ANY = 0, 1, 2
 
@@ -61,6 +65,19 @@ F_MARGIN = 1e-9     # in decision-function units, relative
 SOC_MARGIN = 1e-12  # percent
 THRESHOLD_MARGIN = 1e-9  # relative, on 100 - SoC (see threshold_gap)
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
+# Ticks of a scan epoch: the bounds of the tick scan are computed (one exp per idle UAV) once per
+# epoch and hold for every window of SCAN_TICKS within it; longer epochs, looser bounds.
+EPOCH_TICKS = 4 * SCAN_TICKS
+# An auction picks the UAVs it evaluates from the packed idle set and sorts them into id order
+# if the idle UAVs are at most 1/SORT_FRACTION of the fleet, and otherwise in one pass over the
+# fleet (cheaper than sorting many).
+SORT_FRACTION = 16
+# Rows of Fleet.scan_terms: the order weights, the rest of f at the most favourable SoC of the
+# epoch (an upper bound) and at the least favourable (a lower bound), |b| (for the margin) and ||w||.
+SCAN_W_DISTANCE, SCAN_W_MASS, SCAN_OFFSET, SCAN_OFFSET_LOW, SCAN_ABS_INTERCEPT, SCAN_W_NORM, N_SCAN_ROWS = range(7)
+# Rules whose score is the confidence f / ||w|| (negated for least_confident): an auction
+# evaluates exactly only the bidders whose bounds of it may reach the best one.
+LEAST_CONFIDENT, MOST_CONFIDENT = RULES["least_confident"].code, RULES["most_confident"].code
 NO_TICK = np.int64(2 ** 62)  # a tick index after every run
 # Queue position and membership changes, numpy integers for one compiled queued_at and _tree_add
 # (a Python int literal would be a specialisation of its own).
@@ -117,6 +134,10 @@ class Fleet(NamedTuple):
     steps: np.ndarray       # learner step counter (scikit-learn's t_)
     mode: np.ndarray        # int8
     sup: np.ndarray         # (S, K) local supervisor states
+    quiet: np.ndarray       # bool: from its states, notCapableTask is allowed and changes none
+    # bool: from its states, capableTask and bid are allowed and a lostBid after them brings
+    # every local supervisor back: a losing bid changes nothing, and needs no steps.
+    bid_silent: np.ndarray
     next_s: np.ndarray      # time of the UAV's next event, inf if none; set only through ``schedule``
     event_heap: np.ndarray  # int64: UAV ids in a binary min-heap on (next_s, id), NaN first (see ``schedule``)
     heap_pos: np.ndarray    # int64: where each UAV sits in event_heap
@@ -136,11 +157,18 @@ class Fleet(NamedTuple):
     lost: np.ndarray        # bool: this flight ends in a loss
     allocated_s: np.ndarray  # when the order being flown (or reserved) was allocated
     forecast_wait_s: np.ndarray  # the winning reservation bid, nan if allocated immediately
-    bidding: np.ndarray     # bool scratch of the auction being resolved
+    bidding: np.ndarray     # int8 scratch of the auction being resolved: NO_BID, BID_STEPPED or BID_SILENT
     reach: np.ndarray       # max over queued orders of w_distance x_distance + w_mass x_mass
     reach_stale: np.ndarray  # bool: reach must be recomputed before use
-    x_soc_best: np.ndarray  # scratch of the tick scan: most favourable standardised SoC
-    scan_ids: np.ndarray    # int64 scratch of the tick scan: the idle UAVs
+    # The idle UAVs, packed in no particular order (first counters[N_IDLE]), and where each
+    # sits: the scans that do not depend on id order touch only them.
+    idle_ids: np.ndarray    # int64
+    idle_pos: np.ndarray    # int64, valid for idle UAVs
+    # (N_SCAN_ROWS, S): per slot of idle_ids, the terms of the bounds on its decision value over
+    # the scan epoch (rows SCAN_W_DISTANCE ..., see _may_bid), contiguous so that the tick scan streams.
+    scan_terms: np.ndarray
+    scan_epoch: np.ndarray  # (2,) [start, end] s of the ticks scan_terms hold for; NaN: none yet
+    bid_ids: np.ndarray     # int64 scratch of an auction: the UAVs it evaluates, ascending
 
 
 class Attempts(NamedTuple):
@@ -185,13 +213,125 @@ def soc_at(fleet, i, t, charge_rate):
 
 
 @njit(cache=True)
-def _step(table, fleet, counters, i, event):
-    """Move UAV ``i``'s supervisor along ``event``; record the refusal and return False if not allowed."""
-    if take(table, fleet.sup, i, event):
+def _step(table, sup, quiet, bid_silent, counters, i, event):
+    """Move UAV ``i``'s supervisor along ``event``; record the refusal and return False if not allowed.
+
+    ``sup``, ``quiet`` and ``bid_silent`` are the Fleet's (kept up to date here): arrays, not
+    the whole Fleet, which a call that is not inlined would copy onto the stack.
+    """
+    if event == EV_NOT_CAPABLE and quiet[i]:
+        return True  # allowed, and a self-loop of every local supervisor
+    if take(table, sup, i, event):
+        loops = True
+        silent = True
+        for k in range(table.shape[0]):
+            state = sup[i, k]
+            loops = loops and table[k, state, EV_NOT_CAPABLE] == state
+            capable = table[k, state, EV_CAPABLE]
+            bidding = table[k, capable, EV_BID] if capable >= 0 else -1
+            silent = silent and bidding >= 0 and table[k, bidding, EV_LOST_BID] == state
+        quiet[i] = loops
+        bid_silent[i] = silent
         return True
     counters[REFUSED_UAV] = i
     counters[REFUSED_EVENT] = event
     return False
+
+
+@njit(cache=True)
+def _scan_terms(terms, k, coef, intercept, soc_ref, t_ref, epoch, params, i):
+    """Fill slot ``k`` of ``terms`` (Fleet.scan_terms) for idle UAV ``i`` and the scan epoch ``epoch``.
+
+    SoC only grows while charging, so over the epoch's ticks the most favourable SoC is at
+    its end if f grows with SoC (SoC 100, t = inf, for a UAV that may reserve) and at its
+    start (or the landing, if later) otherwise, and the least favourable at the other end;
+    SOC_MARGIN covers the rounding of ``exp``.
+    """
+    t_start = max(epoch[0], t_ref[i])
+    if coef[i, 2] > 0.0:
+        t_best, t_worst = np.inf if params.reserves else epoch[1], t_start
+    else:
+        t_best, t_worst = t_start, epoch[1]
+    best = soc_after_charging(soc_ref[i], t_best - t_ref[i], params.charge_rate)
+    worst = soc_after_charging(soc_ref[i], t_worst - t_ref[i], params.charge_rate)
+    terms[SCAN_W_DISTANCE, k] = coef[i, 0]
+    terms[SCAN_W_MASS, k] = coef[i, 1]
+    terms[SCAN_OFFSET, k] = intercept[i] + coef[i, 2] * ((best + SOC_MARGIN - params.soc_mean) / params.soc_std)
+    terms[SCAN_OFFSET_LOW, k] = intercept[i] + coef[i, 2] * ((worst - SOC_MARGIN - params.soc_mean) / params.soc_std)
+    terms[SCAN_ABS_INTERCEPT, k] = abs(intercept[i])
+    terms[SCAN_W_NORM, k] = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
+
+
+@njit(cache=True, inline="always")
+def _may_bid(terms, k, x_distance, x_mass):
+    """Whether the idle UAV in slot ``k`` may have f >= 0 for the order at some tick of the scan epoch.
+
+    An upper bound of f (its SoC term at the most favourable SoC), with a margin (F_MARGIN)
+    far above the rounding by which it and the exact decision value differ.
+    """
+    value = terms[SCAN_W_DISTANCE, k] * x_distance + terms[SCAN_W_MASS, k] * x_mass
+    return value + terms[SCAN_OFFSET, k] >= -F_MARGIN * (1.0 + abs(value) + terms[SCAN_ABS_INTERCEPT, k])
+
+
+@njit(cache=True, inline="always")
+def _decision_bounds(terms, k, x_distance, x_mass):
+    """(lower, upper) bounds of the decision value of the idle UAV in slot ``k`` for the order at any tick of the epoch.
+
+    Wider than the exact range by the margin of :func:`_may_bid` on each side.
+    """
+    value = terms[SCAN_W_DISTANCE, k] * x_distance + terms[SCAN_W_MASS, k] * x_mass
+    margin = F_MARGIN * (1.0 + abs(value) + terms[SCAN_ABS_INTERCEPT, k])
+    return value + terms[SCAN_OFFSET_LOW, k] - margin, value + terms[SCAN_OFFSET, k] + margin
+
+
+@njit(cache=True, inline="always")
+def _confidence_bounds(terms, k, x_distance, x_mass, most):
+    """(lower, upper) bounds of the score (confidence, or its negation unless ``most``) of slot ``k`` if it bids.
+
+    The lower bound holds only for a UAV that bids for sure (the lower bound of f >= 0).
+    """
+    low, high = _decision_bounds(terms, k, x_distance, x_mass)
+    w_norm = terms[SCAN_W_NORM, k]
+    if most:
+        return low / w_norm, high / w_norm
+    return -(high / w_norm), -(max(low, 0.0) / w_norm)
+
+
+@njit(cache=True)
+def _score_to_beat(fleet, uavs, n, x_distance, x_mass, most):
+    """The highest score that some UAV among ``uavs[:n]`` bids for sure with (-inf if none)."""
+    beat = -np.inf
+    for j in range(n):
+        k = fleet.idle_pos[uavs[j]]
+        if _decision_bounds(fleet.scan_terms, k, x_distance, x_mass)[0] >= 0.0:
+            beat = max(beat, _confidence_bounds(fleet.scan_terms, k, x_distance, x_mass, most)[0])
+    return beat
+
+
+@njit(cache=True)
+def _become_idle(fleet, counters, params, i):
+    """UAV ``i`` has landed (and learned): it joins the packed idle set."""
+    n_idle = counters[N_IDLE]
+    fleet.mode[i] = IDLE
+    fleet.idle_ids[n_idle] = i
+    fleet.idle_pos[i] = n_idle
+    counters[N_IDLE] = n_idle + 1
+    _scan_terms(fleet.scan_terms, n_idle, fleet.coef, fleet.intercept, fleet.soc_ref, fleet.t_ref,
+                fleet.scan_epoch, params, i)
+
+
+@njit(cache=True)
+def _leave_idle(fleet, counters, i):
+    """UAV ``i`` (idle) won an auction: the last of the packed idle set moves to its slot."""
+    last = counters[N_IDLE] - 1
+    moved = fleet.idle_ids[last]
+    k = fleet.idle_pos[i]
+    fleet.idle_ids[k] = moved
+    fleet.idle_pos[moved] = k
+    terms = fleet.scan_terms
+    for row in range(terms.shape[0]):
+        terms[row, k] = terms[row, last]
+    counters[N_IDLE] = last
 
 
 @njit(cache=True)
@@ -379,9 +519,8 @@ def _earliest_bid(book, fleet, counters, params, t):
     """
     earliest = np.inf
     theta_gap = threshold_gap(params.theta)
-    for i in range(fleet.mode.shape[0]):
-        if fleet.mode[i] != IDLE:
-            continue
+    for k in range(counters[N_IDLE]):
+        i = fleet.idle_ids[k]
         soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
         if params.bids_on == BIDS_ON_SOC_THRESHOLD:
             if soc >= params.theta:
@@ -424,29 +563,23 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     """The first tick before tick ``end_max`` (and within SCAN_TICKS) whose order some idle UAV may bid on.
 
     Only for rules that bid on their policy. Over the scanned ticks each idle UAV's
-    decision value for an order is at most its value at the most favourable SoC of the
-    window (the end if f grows with SoC, the start otherwise; SoC 100 if it may reserve),
+    decision value for an order is at most its bound over the scan epoch (:func:`_may_bid`),
     so an order for which that bound is negative for everyone has no bidder at its tick.
+    A window past the epoch starts a new one at ``t_tick``.
     Returns the index of the first tick that may have one, or of the tick after the window.
     """
     interval = params.advert_interval_s
     tick = counters[NEXT_TICK]
     end = min(end_max, tick + SCAN_TICKS)
-    t_end = end * interval  # after every scanned tick
-    # Charging drives SoC up to 100 (t = inf), where a UAV that may reserve is keenest.
-    t_keenest = np.inf if params.reserves else t_end
-    coef = fleet.coef
-    intercept = fleet.intercept
-    x_soc_best = fleet.x_soc_best
-    idle = fleet.scan_ids  # the idle UAVs, packed: the scan below touches only them
-    n_idle = 0
-    for i in range(fleet.mode.shape[0]):
-        if fleet.mode[i] == IDLE:
-            t_best = t_keenest if coef[i, 2] > 0.0 else t_tick
-            soc = soc_after_charging(fleet.soc_ref[i], t_best - fleet.t_ref[i], params.charge_rate)
-            x_soc_best[i] = (soc + SOC_MARGIN - params.soc_mean) / params.soc_std
-            idle[n_idle] = i
-            n_idle += 1
+    n_idle = counters[N_IDLE]
+    epoch = fleet.scan_epoch
+    if not end * interval <= epoch[1]:  # after every scanned tick
+        epoch[0] = t_tick
+        epoch[1] = t_tick + EPOCH_TICKS * interval
+        for k in range(n_idle):
+            _scan_terms(fleet.scan_terms, k, fleet.coef, fleet.intercept, fleet.soc_ref, fleet.t_ref, epoch, params,
+                        fleet.idle_ids[k])
+    terms = fleet.scan_terms
     tree = book.queue_tree
     link = book.queue_next
     x_distance = book.x_distance
@@ -455,12 +588,11 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     for j in range(end - tick):
         x0 = x_distance[order]
         x1 = x_mass[order]
-        for k in range(n_idle):
-            i = idle[k]
-            value = _order_value(coef, i, x0, x1)
-            f = value + intercept[i] + coef[i, 2] * x_soc_best[i]
-            if f >= -F_MARGIN * (1.0 + abs(value) + abs(intercept[i])):
-                return tick + j
+        anyone = False
+        for k in range(n_idle):  # no early exit: a branch-free loop the compiler can vectorise
+            anyone |= _may_bid(terms, k, x0, x1)
+        if anyone:
+            return tick + j
         order = link[order]
         if order < 0:  # past the newest: round again from the oldest
             order = queued_at(tree, OLDEST)
@@ -544,7 +676,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
     row = fleet.attempt[i]
     order = fleet.order[i]
     if fleet.mode[i] == RESERVED:
-        if not _step(table, fleet, counters, i, EV_DELIVER):
+        if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_DELIVER):
             return False
         counters[N_RESERVED] -= 1
         _takeoff(book, fleet, attempts, counters, params, i, order, t,
@@ -559,7 +691,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         else:
             attempts.outcome[row] = OUTCOME_ABORTED
             counters[N_ABORTED] += 1
-        if not _step(table, fleet, counters, i, EV_COND_RETURN):
+        if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_COND_RETURN):
             return False
         fleet.mode[i] = RETURNING
         schedule(fleet, i, t + fleet.home_s[i])
@@ -576,13 +708,11 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
         if not fleet.delivers[i]:
             _enqueue(book, fleet, counters, order)
         return True
-    if not _step(table, fleet, counters, i, EV_RETURN):
+    if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_RETURN):
         return False
     attempts.return_soc[row] = fleet.land_soc[i]
-    fleet.mode[i] = IDLE
     fleet.soc_ref[i] = fleet.land_soc[i]
     fleet.t_ref[i] = t
-    counters[N_IDLE] += 1
     if not fleet.delivers[i]:
         _enqueue(book, fleet, counters, order)
     # One partial_fit step on what the UAV saw at takeoff and what happened.
@@ -591,6 +721,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
              (fleet.takeoff_soc[i] - params.soc_mean) / params.soc_std,
              1.0 if fleet.delivers[i] else 0.0, params.alpha, params.t0)
     fleet.reach_stale[i] = True
+    _become_idle(fleet, counters, params, i)
     return True
 
 
@@ -646,16 +777,44 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
             if wait < np.inf and decision(fleet.coef, fleet.intercept, i, x0, x1, x_full) < 0.0:
                 wait = np.inf
         if wait == np.inf:
-            if not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
+            if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_NOT_CAPABLE):
                 return True, -1, np.inf
             continue
-        if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
+        if not (_step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_CAPABLE)
+                and _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_BID)):
             return True, -1, np.inf
-        fleet.bidding[i] = True
+        fleet.bidding[i] = BID_STEPPED
         if wait <= best_wait:  # ascending ids: ties go to the highest id
             best_wait = wait
             reserver = i
     return False, reserver, best_wait
+
+
+@njit(cache=True)
+def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
+    """Put the idle UAVs an auction must evaluate into ``fleet.bid_ids``, ascending; return how many.
+
+    All idle UAVs, or with ``bounded`` (a rule that bids on its policy, bounds that hold now,
+    no reservations) only those that may bid (:func:`_may_bid`) or whose notCapableTask
+    step is not a silent self-loop: for the others the auction changes nothing.
+    """
+    ids = fleet.bid_ids
+    n_uavs = fleet.mode.shape[0]
+    n = 0
+    if bounded and counters[N_IDLE] * SORT_FRACTION <= n_uavs:
+        for k in range(counters[N_IDLE]):
+            i = fleet.idle_ids[k]
+            if not fleet.quiet[i] or _may_bid(fleet.scan_terms, k, x_distance, x_mass):
+                ids[n] = i
+                n += 1
+        ids[:n].sort()
+        return n
+    for i in range(n_uavs):
+        if fleet.mode[i] == IDLE and (not bounded or not fleet.quiet[i]
+                                      or _may_bid(fleet.scan_terms, fleet.idle_pos[i], x_distance, x_mass)):
+            ids[n] = i
+            n += 1
+    return n
 
 
 @njit(cache=True)
@@ -676,29 +835,48 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     winner = -1
     winner_soc = 0.0
     best = -np.inf
-    n_uavs = fleet.mode.shape[0]
     bidder = fleet.bidding
     # Arrays bound once, and weights read by index: no array views made per UAV in this loop.
-    mode = fleet.mode
     coef = fleet.coef
     soc_ref = fleet.soc_ref
     t_ref = fleet.t_ref
-    for i in range(n_uavs):
-        bidder[i] = False
-        if mode[i] != IDLE:
+    # A rule that bids on its policy cannot bid where the tick scan's bound rules it out: no
+    # SoC (exp) and decision then for that UAV.
+    bounded = params.bids_on == BIDS_ON_POLICY and fleet.scan_epoch[0] <= t <= fleet.scan_epoch[1]
+    uavs = fleet.bid_ids
+    n_evaluated = _auction_uavs(fleet, counters, x0, x1, bounded and not params.reserves)
+    # Under a confidence rule, a bidder whose score is certainly below one that some UAV bids
+    # for sure cannot win (nor tie): if its bid and loss change nothing (bid_silent) and its
+    # not bidding neither (quiet), it need not be evaluated at all.
+    confidence = bounded and not params.reserves and (params.rule == LEAST_CONFIDENT or params.rule == MOST_CONFIDENT)
+    most = params.rule == MOST_CONFIDENT
+    beat = _score_to_beat(fleet, uavs, n_evaluated, x0, x1, most) if confidence else -np.inf
+    for j in range(n_evaluated):
+        i = uavs[j]
+        bidder[i] = NO_BID
+        if (confidence and fleet.quiet[i] and fleet.bid_silent[i]
+                and _confidence_bounds(fleet.scan_terms, fleet.idle_pos[i], x0, x1, most)[1] < beat):
             continue
-        soc = soc_after_charging(soc_ref[i], t - t_ref[i], params.charge_rate)
-        f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
-        w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
-        bids, score = bid(params.rule, rule_kernel, f, w_norm, soc, params.theta, rng)
+        if bounded and not _may_bid(fleet.scan_terms, fleet.idle_pos[i], x0, x1):
+            bids = False
+        else:
+            soc = soc_after_charging(soc_ref[i], t - t_ref[i], params.charge_rate)
+            f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
+            w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
+            bids, score = bid(params.rule, rule_kernel, f, w_norm, soc, params.theta, rng)
         if not bids:
             # With reservations the UAV's step waits for the second phase.
-            if not params.reserves and not _step(table, fleet, counters, i, EV_NOT_CAPABLE):
+            if (not params.reserves and not fleet.quiet[i]
+                    and not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_NOT_CAPABLE)):
                 return False
             continue
-        if not (_step(table, fleet, counters, i, EV_CAPABLE) and _step(table, fleet, counters, i, EV_BID)):
+        if fleet.bid_silent[i]:
+            bidder[i] = BID_SILENT
+        elif (_step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_CAPABLE)
+                and _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_BID)):
+            bidder[i] = BID_STEPPED
+        else:
             return False
-        bidder[i] = True
         if score >= best:  # ascending ids: ties go to the highest id
             best = score
             winner = i
@@ -714,16 +892,21 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     if winner < 0:
         counters[LAST_ADVERTISED] = order
         return True
-    for i in range(n_uavs):
-        if bidder[i] and i != winner and not _step(table, fleet, counters, i, EV_LOST_BID):
+    for j in range(n_evaluated):
+        i = uavs[j]
+        if (bidder[i] == BID_STEPPED and i != winner
+                and not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_LOST_BID)):
             return False
-    if not _step(table, fleet, counters, winner, EV_WON):
+    if bidder[winner] == BID_SILENT:  # its bid's steps, allowed (bid_silent), then the win
+        _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_CAPABLE)
+        _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_BID)
+    if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_WON):
         return False
     # Allocated: out of the queue, and the next advertisement starts again from the oldest.
     _dequeue(book, fleet, counters, pos)
     counters[LAST_ADVERTISED] = -1
     counters[MAY_BID] = 0
-    counters[N_IDLE] -= 1
+    _leave_idle(fleet, counters, winner)
     fleet.allocated_s[winner] = t
     if reserved:
         # Stays at the FC, charging, in the supervisor's state after wonBid until takeoff.
@@ -734,7 +917,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
         counters[N_RESERVED] += 1
         counters[N_RESERVATIONS] += 1
         return True
-    if not _step(table, fleet, counters, winner, EV_DELIVER):
+    if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_DELIVER):
         return False
     fleet.forecast_wait_s[winner] = np.nan
     _takeoff(book, fleet, attempts, counters, params, winner, order, t, winner_soc)

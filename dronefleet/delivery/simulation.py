@@ -136,7 +136,12 @@ def initial_state(config: Config, supervisor: str | os.PathLike | None = None, o
     table = automaton.transition_table(engine.EVENT_NAMES)
     bids_on = BIDS_ON[rule.bids_on]
     idle = automaton.init_state
-    if np.any(table[np.arange(idle.shape[0]), idle, engine.EV_NOT_CAPABLE] != idle):
+    supervisors = np.arange(idle.shape[0])
+    quiet = bool(np.all(table[supervisors, idle, engine.EV_NOT_CAPABLE] == idle))
+    capable = table[supervisors, idle, engine.EV_CAPABLE]
+    bidding = np.where(capable >= 0, table[supervisors, capable, engine.EV_BID], -1)
+    bid_silent = bool(np.all((bidding >= 0) & (table[supervisors, bidding, engine.EV_LOST_BID] == idle)))
+    if not quiet:
         # Skipped ticks do not step notCapableTask; that is exact only if it is a self-loop.
         bids_on = BIDS_ON["any"]
 
@@ -146,19 +151,23 @@ def initial_state(config: Config, supervisor: str | os.PathLike | None = None, o
         power_w=config_power(config, orders.mass_kg), attempts=np.zeros(n, np.int32),
         delivered_s=np.full(n, np.nan), queue_tree=np.zeros(n + 1, np.int64),
         queue_next=np.full(n, -1, np.int64))
+    idle_ids = np.argsort(lost, kind="stable").astype(np.int64)  # the idle UAVs first (the lost ones after)
     fleet = engine.Fleet(
         soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,
         mode=np.where(lost, engine.LOST, engine.IDLE).astype(np.int8),
-        sup=np.tile(automaton.init_state.astype(np.int64), (s, 1)),
+        sup=np.tile(automaton.init_state.astype(np.int64), (s, 1)), quiet=np.full(s, quiet),
+        bid_silent=np.full(s, bid_silent),
         next_s=np.full(s, np.inf), event_heap=np.arange(s, dtype=np.int64),
         heap_pos=np.arange(s, dtype=np.int64), soc_ref=soc.astype(np.float64), t_ref=np.zeros(s),
         order=np.full(s, -1, np.int64), attempt=np.full(s, -1, np.int64),
         takeoff_s=np.zeros(s), takeoff_soc=np.zeros(s), rate_out=np.zeros(s), turn_s=np.zeros(s),
         turn_soc=np.zeros(s), rate_home=np.zeros(s), home_s=np.zeros(s), land_soc=np.zeros(s),
         delivers=np.zeros(s, np.bool_), lost=np.zeros(s, np.bool_), allocated_s=np.zeros(s),
-        forecast_wait_s=np.full(s, np.nan), bidding=np.zeros(s, np.bool_),
-        reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), x_soc_best=np.zeros(s),
-        scan_ids=np.zeros(s, np.int64))
+        forecast_wait_s=np.full(s, np.nan), bidding=np.zeros(s, np.int8),
+        reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), idle_ids=idle_ids,
+        idle_pos=np.argsort(idle_ids).astype(np.int64), scan_terms=np.zeros((engine.N_SCAN_ROWS, s)),
+        scan_epoch=np.full(2, np.nan),
+        bid_ids=np.zeros(s, np.int64))
     n_samples = int(math.floor(config.horizon_s / config.record_interval_s)) + 1
     series = engine.Series(*(np.zeros(n_samples, np.int64) for _ in engine.Series._fields))
     counters = np.zeros(engine.N_COUNTERS, np.int64)

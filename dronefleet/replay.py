@@ -66,15 +66,29 @@ def page(data, scene_script) -> str:
 def write(run_dir, out) -> Path:
     """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
 
-    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or ``out``
-    cannot be written (a folder, a missing or read-only parent, ...).
+    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
+    table that cannot be read, or if ``out`` cannot be written (a folder, a missing or
+    read-only parent, a file of a run folder other than its ``replay.html``, ...).
     """
+    import pyarrow as pa
+
     run_dir, out = Path(run_dir), Path(out)
     scenario = scenario_of_run(run_dir)
     if out.is_dir():
         raise ConfigError(f"--out {str(out)!r} is a folder; give the page's file name, e.g. {out / REPLAY_FILE}")
     if not out.parent.is_dir():
         raise ConfigError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
-    html = page(scenario.replay_data(run_dir), scenario.replay_script)
+    # any other file in a run folder would overwrite a table or make the folder no longer a run
+    if out.name != REPLAY_FILE and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
+                                       for s in scenarios.SCENARIOS.values()):
+        raise ConfigError(f"--out {str(out)!r} lies in a run folder, where the page can only be "
+                          f"{str(out.parent / REPLAY_FILE)!r}; choose that or a file outside it")
+    try:
+        data = scenario.replay_data(run_dir)
+    except (OSError, pa.ArrowException) as error:  # a table cut short, corrupt, or of another scenario
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r} holds a table that cannot be read as a {scenario.name} "
+                          f"run's ({first}); write the run again with dronefleet run") from None
+    html = page(data, scenario.replay_script)
     with writing(out):
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))

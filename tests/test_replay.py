@@ -150,6 +150,32 @@ def test_bad_run_folders_are_refused_in_one_line(tmp_path, capsys, delivery_run)
     _refused(capsys, ["replay", str(partial)], "not a complete delivery run folder")
 
 
+@pytest.mark.parametrize("damage", ["cut short", "of the other scenario"])
+def test_a_run_folder_with_an_unreadable_table_is_refused_in_one_line(damage, tmp_path, capsys, delivery_run,
+                                                                     replenishment_run):
+    damaged = tmp_path / "run"
+    shutil.copytree(delivery_run, damaged)
+    if damage == "cut short":
+        data = (damaged / "orders.parquet").read_bytes()
+        (damaged / "orders.parquet").write_bytes(data[:len(data) // 2])
+    else:
+        shutil.copy(replenishment_run / "timeseries.parquet", damaged / "timeseries.parquet")
+    _refused(capsys, ["replay", str(damaged), "--out", str(tmp_path / "page.html")],
+             "holds a table that cannot be read as a delivery run's")
+    assert not (tmp_path / "page.html").exists()
+
+
+def test_a_page_is_never_written_over_a_table_or_beside_one_under_another_name(tmp_path, capsys, delivery_run,
+                                                                              replenishment_run):
+    summary = (delivery_run / "summary.parquet").read_bytes()
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(delivery_run / "summary.parquet")],
+             "lies in a run folder, where the page can only be")
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(replenishment_run / "page.html")],
+             f"{str(replenishment_run / REPLAY_FILE)!r}")
+    assert (delivery_run / "summary.parquet").read_bytes() == summary
+    assert run_dir_state(replenishment_run, ("summary", "timeseries")) == "complete"
+
+
 def test_unwritable_pages_are_refused_in_one_line(tmp_path, capsys, delivery_run, monkeypatch):
     _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path)], "is a folder")
     _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "no" / "page.html")], "does not exist")

@@ -436,6 +436,13 @@ def command(args):
     root = args.out or (COMMITTED_RESULTS if args.update_results or args.check else DEFAULT_OUT)
     if root.exists() and not root.is_dir():
         raise SweepError(f"--out {str(root)!r} is a file: give the folder to write the results under")
+    if args.update_results and not COMMITTED_RESULTS.is_dir():  # it would start a results/ of its own here
+        raise SweepError(f"--update-results refreshes the committed {COMMITTED_RESULTS}/, and {str(Path.cwd())!r} "
+                         "has none: run it from the repository's root, or write elsewhere with --out DIR")
+    if args.out is not None and not args.check and COMMITTED_RESULTS.is_dir() and root.resolve() == \
+            COMMITTED_RESULTS.resolve():
+        raise SweepError(f"--out {str(root)!r} is the committed {COMMITTED_RESULTS}/: refresh them with "
+                         "--update-results, or write elsewhere with another --out")
     start = time.perf_counter()
     if args.check:
         if args.redraw:

@@ -246,6 +246,23 @@ def test_out_and_update_results_exclude_each_other(tmp_path, capsys):
     assert "not allowed with argument" in capsys.readouterr().err
 
 
+def test_committed_results_are_written_only_with_update_results_and_only_where_they_are(tmp_path, monkeypatch,
+                                                                                         capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(reproduce, "reproduce", lambda *a, **k: pytest.fail("reproduce ran"))
+    assert cli.main(["reproduce", "fig17", "--quick", "--update-results"]) == 2
+    assert capsys.readouterr().err == (f"dronefleet: error: --update-results refreshes the committed results/, and "
+                                       f"{str(tmp_path)!r} has none: run it from the repository's root, or write "
+                                       "elsewhere with --out DIR\n")
+    (tmp_path / "results").mkdir()
+    for out in ("results", str(tmp_path / "results"), "results/../results"):
+        assert cli.main(["reproduce", "fig17", "--quick", "--out", out]) == 2
+        assert capsys.readouterr().err == (f"dronefleet: error: --out {str(Path(out))!r} is the committed results/: "
+                                           "refresh them with --update-results, or write elsewhere with another "
+                                           "--out\n")
+    assert not any((tmp_path / "results").iterdir())
+
+
 def test_an_out_that_is_a_file_is_refused_in_one_line(tmp_path, capsys):
     taken = tmp_path / "notes.txt"
     taken.write_text("mine\n")

@@ -226,6 +226,15 @@ class _Commands(argparse._SubParsersAction):
         kwargs["parents"] = [*kwargs.get("parents", ()), _verbosity(argparse.SUPPRESS)]
         return super().add_parser(name, **kwargs)
 
+    def __call__(self, parser, namespace, values, option_string=None):
+        # the command's flags replace those before it: -q before and -v after (or the reverse)
+        # would pass each parser's own check, and one of them would be dropped unsaid
+        before = getattr(namespace, "level", None)
+        super().__call__(parser, namespace, values, option_string)
+        if before not in (None, logging.INFO) and namespace.level != before:  # INFO: no flag given
+            raise argparse.ArgumentError(None, "-q/--quiet and -v/--verbose are not allowed together "
+                                               "(before the command or after it)")
+
 
 class _Parser(argparse.ArgumentParser):
     """argparse with usage errors on one line, like every other refusal (exit code 2), and

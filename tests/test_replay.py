@@ -1,6 +1,7 @@
 """The replay page: its data follows the run's tables, it is self-contained, the command refuses
 bad input in one line, and it plays in a real browser (headless Chromium) without an error."""
 
+import importlib
 import json
 import re
 import shutil
@@ -15,6 +16,7 @@ from dronefleet.delivery.replay import replay_data as delivery_data
 from dronefleet.records import REPLAY_FILE, run_dir_state
 from dronefleet.replenishment import Params, simulate
 from dronefleet.replenishment.kernel import BASE, TRANSFER, WORK, floor_colour
+from dronefleet.replenishment import replay as replay_module
 from dronefleet.replenishment.replay import AREAS
 from dronefleet.replenishment.replay import replay_data as replenishment_data
 
@@ -93,6 +95,23 @@ def test_replenishment_replay_is_the_runs_first_trial(replenishment_run):
     assert len(data["work"]) == 900 // 10 + 1 and len(data["x"]) == len(data["work"]) * 12
     assert data["stored"][0] == 6 * 100.0 + 6 * 200.0
     assert max(map(abs, data["x"] + data["y"])) <= data["wall_m"]
+
+
+def test_a_long_replenishment_run_is_replayed_from_the_frames_alone(replenishment_run, monkeypatch):
+    # 91 samples, at most 7 frames: every 13th sample. Only those are tracked, not all 91
+    # (a long run's every sample would exhaust memory), and they are the same.
+    full = replenishment_data(replenishment_run)
+    monkeypatch.setattr(replay_module, "MAX_FRAMES", 7)
+    tracked = []
+    module = importlib.import_module("dronefleet.replenishment.simulate")  # the package's name is the function
+    monkeypatch.setattr(module, "simulate",
+                        lambda p, **k: tracked.append(p.sample_every) or simulate(p, **k))
+    data = replenishment_data(replenishment_run)
+    assert tracked == [130]
+    assert data["frame_s"] == 13.0 and len(data["work"]) == 7
+    assert data["work"] == full["work"][::13] and data["stored"] == full["stored"][::13]
+    for name in ("x", "y", "energy", "phase"):
+        assert data[name] == np.reshape(full[name], (91, 12))[::13].reshape(-1).tolist(), name
 
 
 def test_the_track_changes_no_output_and_agrees_with_the_time_series():

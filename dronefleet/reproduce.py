@@ -52,6 +52,7 @@ import pyarrow.parquet as pq
 
 from .config import shipped_config
 from .delivery import analysis
+from .outputs import probe_folders
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
@@ -359,6 +360,7 @@ def reproduce(figures, out=DEFAULT_OUT, quick=False, jobs=None, redraw=False, lo
         raise SweepError(str(error)) from None
     study = Study(out, quick, jobs, log, theta)
     _check_theta(study, figures, redraw)
+    probe_folders([study.root])  # a root under a file or not writable: one line, not a traceback at the first run
     if not redraw:
         replenishment.run_together(study, [figure for figure in figures if figure in REPLENISHMENT_FIGURES])
     drawn = {}

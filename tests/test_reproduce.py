@@ -246,6 +246,16 @@ def test_out_and_update_results_exclude_each_other(tmp_path, capsys):
     assert "not allowed with argument" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("redraw", [[], ["--redraw"]])
+def test_an_out_under_a_file_is_refused_in_one_line(redraw, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(reproduce.replenishment, "run_together", lambda *a: pytest.fail("a figure ran"))
+    (tmp_path / "notes.txt").write_text("mine\n")
+    assert cli.main(["reproduce", "fig10", "--quick", "--out", str(tmp_path / "notes.txt" / "results"), *redraw]) == 2
+    assert capsys.readouterr().err == (f"dronefleet: error: cannot write "
+                                       f"{str(tmp_path / 'notes.txt' / 'results' / 'quick')!r}: Not a directory\n")
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+
+
 def test_committed_results_are_written_only_with_update_results_and_only_where_they_are(tmp_path, monkeypatch,
                                                                                          capsys):
     monkeypatch.chdir(tmp_path)

@@ -34,9 +34,11 @@ def scenario_of_run(run_dir) -> scenarios.Scenario:
                           "give a folder that dronefleet run wrote")
     try:
         config = json.loads(pq.read_schema(run_dir / "summary.parquet").metadata[CONFIG_KEY])
-    except (OSError, KeyError, TypeError, ValueError):  # absent, not parquet, no config in it
+    except (OSError, KeyError, TypeError, ValueError):
+        config = None
+    if not isinstance(config, dict):  # absent, not parquet, no config in it (or JSON that is no config)
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a run folder: it has no summary.parquet "
-                          "written by dronefleet run") from None
+                          "written by dronefleet run")
     scenario = scenarios.get(config.get(SCENARIO_KEY, "delivery"), f"RUN_DIR {str(run_dir)!r}: ")
     if run_dir_state(run_dir, scenario.tables) != "complete":
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a complete {scenario.name} run folder: it must "

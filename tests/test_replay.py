@@ -13,7 +13,7 @@ import pytest
 
 from dronefleet import cli, replay
 from dronefleet.delivery.replay import replay_data as delivery_data
-from dronefleet.records import REPLAY_FILE, run_dir_state
+from dronefleet.records import CONFIG_KEY, REPLAY_FILE, run_dir_state
 from dronefleet.replenishment import Params, simulate
 from dronefleet.replenishment.kernel import BASE, TRANSFER, WORK, floor_colour
 from dronefleet.replenishment import replay as replay_module
@@ -167,6 +167,10 @@ def test_bad_run_folders_are_refused_in_one_line(tmp_path, capsys, delivery_run)
     shutil.copytree(delivery_run, partial)
     (partial / "fleet.parquet").unlink()
     _refused(capsys, ["replay", str(partial)], "not a complete delivery run folder")
+    shutil.copy(delivery_run / "fleet.parquet", partial)
+    summary = pq.read_table(partial / "summary.parquet")
+    pq.write_table(summary.replace_schema_metadata({CONFIG_KEY: "[]"}), partial / "summary.parquet")
+    _refused(capsys, ["replay", str(partial)], "is not a run folder: it has no summary.parquet written by")
 
 
 @pytest.mark.parametrize("damage", ["cut short", "of the other scenario"])

@@ -24,25 +24,39 @@ __all__ = ["scenario_of_run", "page", "write"]
 TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
 
 
-def scenario_of_run(run_dir) -> scenarios.Scenario:
-    """The scenario whose complete run folder ``run_dir`` is; ConfigError (one line) otherwise."""
+def _config_text(table_path):
+    """The config a run's table carries (JSON bytes), or None: absent, not parquet, cut short."""
     import pyarrow.parquet as pq
 
+    try:
+        return pq.read_schema(table_path).metadata[CONFIG_KEY]
+    except (OSError, KeyError, TypeError, ValueError):  # ArrowInvalid is a ValueError
+        return None
+
+
+def scenario_of_run(run_dir) -> scenarios.Scenario:
+    """The scenario whose complete run folder ``run_dir`` is; ConfigError (one line) otherwise."""
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is {'a file' if run_dir.exists() else 'missing'}; "
                           "give a folder that dronefleet run wrote")
+    text = _config_text(run_dir / "summary.parquet")
     try:
-        config = json.loads(pq.read_schema(run_dir / "summary.parquet").metadata[CONFIG_KEY])
-    except (OSError, KeyError, TypeError, ValueError):
+        config = json.loads(text)
+    except (TypeError, ValueError):
         config = None
-    if not isinstance(config, dict):  # absent, not parquet, no config in it (or JSON that is no config)
+    if not isinstance(config, dict):  # no config, or JSON that is no config
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a run folder: it has no summary.parquet "
                           "written by dronefleet run")
     scenario = scenarios.get(config.get(SCENARIO_KEY, "delivery"), f"RUN_DIR {str(run_dir)!r}: ")
     if run_dir_state(run_dir, scenario.tables) != "complete":
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a complete {scenario.name} run folder: it must "
                           f"hold exactly {', '.join(f'{name}.parquet' for name in scenario.tables)}")
+    # every table of a run carries its config: a table of another run (or cut short) has another or none
+    strays = [f"{name}.parquet" for name in scenario.tables if _config_text(run_dir / f"{name}.parquet") != text]
+    if strays:
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r}: {', '.join(strays)} not of the run in summary.parquet "
+                          "(another run's config, or unreadable); write the run again with dronefleet run")
     return scenario
 
 
@@ -87,7 +101,7 @@ def write(run_dir, out) -> Path:
                           f"{str(out.parent / REPLAY_FILE)!r}; choose that or a file outside it")
     try:
         data = scenario.replay_data(run_dir)
-    except (OSError, pa.ArrowException) as error:  # a table cut short, corrupt, or of another scenario
+    except (OSError, pa.ArrowException) as error:  # a table whose data (not its footer) is corrupt
         first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} holds a table that cannot be read as a {scenario.name} "
                           f"run's ({first}); write the run again with dronefleet run") from None

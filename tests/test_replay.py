@@ -173,18 +173,29 @@ def test_bad_run_folders_are_refused_in_one_line(tmp_path, capsys, delivery_run)
     _refused(capsys, ["replay", str(partial)], "is not a run folder: it has no summary.parquet written by")
 
 
-@pytest.mark.parametrize("damage", ["cut short", "of the other scenario"])
-def test_a_run_folder_with_an_unreadable_table_is_refused_in_one_line(damage, tmp_path, capsys, delivery_run,
-                                                                     replenishment_run):
+@pytest.mark.parametrize("damage, fragment", [
+    ("cut short", "orders.parquet not of the run in summary.parquet (another run's config, or unreadable)"),
+    ("of the other scenario", "timeseries.parquet not of the run in summary.parquet"),
+    ("of another run", "orders.parquet not of the run in summary.parquet"),
+    ("corrupt inside", "holds a table that cannot be read as a delivery run's (Couldn't deserialize thrift"),
+])
+def test_a_run_folder_with_an_unreadable_or_stray_table_is_refused_in_one_line(damage, fragment, tmp_path, capsys,
+                                                                              delivery_run, replenishment_run):
     damaged = tmp_path / "run"
     shutil.copytree(delivery_run, damaged)
+    orders = damaged / "orders.parquet"
+    data = orders.read_bytes()
     if damage == "cut short":
-        data = (damaged / "orders.parquet").read_bytes()
-        (damaged / "orders.parquet").write_bytes(data[:len(data) // 2])
-    else:
+        orders.write_bytes(data[:len(data) // 2])
+    elif damage == "of the other scenario":
         shutil.copy(replenishment_run / "timeseries.parquet", damaged / "timeseries.parquet")
-    _refused(capsys, ["replay", str(damaged), "--out", str(tmp_path / "page.html")],
-             "holds a table that cannot be read as a delivery run's")
+    elif damage == "of another run":  # the same columns, fewer orders: the attempts would index past them
+        assert cli.main(["run", "--set", "horizon_weeks=0.01", "--set", "n_uavs=2", "--out", str(tmp_path / "o")]) == 0
+        shutil.copy(tmp_path / "o" / "orders.parquet", orders)
+    else:  # the first page's header overwritten, the footer (schema and config) intact
+        orders.write_bytes(data[:4] + b"\xab" * 64 + data[4 + 64:])
+    capsys.readouterr()
+    _refused(capsys, ["replay", str(damaged), "--out", str(tmp_path / "page.html")], fragment)
     assert not (tmp_path / "page.html").exists()
 
 

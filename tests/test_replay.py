@@ -12,6 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from dronefleet import cli, replay
+from dronefleet.delivery import replay as delivery_replay
 from dronefleet.delivery.replay import replay_data as delivery_data
 from dronefleet.records import CONFIG_KEY, REPLAY_FILE, run_dir_state
 from dronefleet.replenishment import Params, simulate
@@ -196,6 +197,16 @@ def test_a_run_folder_with_an_unreadable_or_stray_table_is_refused_in_one_line(d
         orders.write_bytes(data[:4] + b"\xab" * 64 + data[4 + 64:])
     capsys.readouterr()
     _refused(capsys, ["replay", str(damaged), "--out", str(tmp_path / "page.html")], fragment)
+    assert not (tmp_path / "page.html").exists()
+
+
+def test_a_run_too_large_to_play_is_refused_in_one_line_before_its_tables_are_read(tmp_path, capsys, delivery_run,
+                                                                                  monkeypatch):
+    flights = pq.ParquetFile(delivery_run / "attempts.parquet").metadata.num_rows
+    monkeypatch.setattr(delivery_replay, "MAX_FLIGHTS", flights - 1)
+    monkeypatch.setattr(pq, "read_table", lambda *a, **k: pytest.fail("a table was read"))
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "page.html")],
+             f"has {flights:,} attempts; a replay page draws at most {flights - 1:,}")
     assert not (tmp_path / "page.html").exists()
 
 

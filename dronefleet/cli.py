@@ -101,6 +101,10 @@ def run(args: argparse.Namespace) -> int:
         return run_scenario(scenario, args)
     overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
     config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
+    if args.replay:
+        from .delivery.replay import check_replayable
+
+        check_replayable(config)
     name = Path(args.config).stem if args.config else "paper"
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 

@@ -210,6 +210,16 @@ def test_a_run_too_large_to_play_is_refused_in_one_line_before_its_tables_are_re
     assert not (tmp_path / "page.html").exists()
 
 
+def test_run_replay_of_a_run_too_large_to_play_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(delivery_replay, "MAX_FLIGHTS", 100)  # 0.1 weeks at tau 15 min: ~67 orders
+    _refused(capsys, ["run", "--set", "horizon_weeks=0.3", "--out", str(tmp_path / "run"), "--replay"],
+             "--replay: the run would hold ~2e+02 orders and a replay page draws at most 100 attempts")
+    assert not (tmp_path / "run").exists()
+    assert cli.main(["run", "--set", "horizon_weeks=0.1", "--set", "n_uavs=5", "--out", str(tmp_path / "run"),
+                     "--replay"]) == 0
+    assert (tmp_path / "run" / REPLAY_FILE).is_file()
+
+
 def test_a_page_is_never_written_over_a_table_or_beside_one_under_another_name(tmp_path, capsys, delivery_run,
                                                                               replenishment_run):
     summary = (delivery_run / "summary.parquet").read_bytes()

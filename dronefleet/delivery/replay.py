@@ -17,7 +17,7 @@ import pyarrow.parquet as pq
 from ..config import ConfigError
 from .config import SECONDS_PER_WEEK
 
-__all__ = ["replay_data", "GOLDEN_ANGLE", "MAX_FLIGHTS"]
+__all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS"]
 
 #: Bearing step between consecutive order ids [rad]: successive orders never line up.
 GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
@@ -30,6 +30,17 @@ MAX_FLIGHTS = 1_000_000
 def _rounded(values, decimals):
     """A float column as a JSON-ready list, to ``decimals`` places (the page draws pixels)."""
     return np.round(np.asarray(values, dtype=np.float64), decimals).tolist()
+
+
+def check_replayable(config):
+    """Refuse (ConfigError, one line) before ``dronefleet run --replay`` simulates a run whose
+    expected orders alone exceed :data:`MAX_FLIGHTS`: its page would be refused after the run."""
+    from .config import run_size
+
+    orders = run_size(config)["orders"]
+    if orders > MAX_FLIGHTS:
+        raise ConfigError(f"--replay: the run would hold ~{orders:.2g} orders and a replay page draws at most "
+                          f"{MAX_FLIGHTS:,} attempts: run it without --replay, or a shorter run (horizon_weeks)")
 
 
 def replay_data(run_dir):

@@ -339,8 +339,8 @@ def _check_theta(study, figures, redraw):
         raise SweepError(f"--theta {theta:g} chooses the runs in fig19's tables, which --redraw only draws: "
                          "give one of them")
     sweep = study.sweep("thresholds")
-    if theta not in sweep.grid["theta"]:
-        raise SweepError(f"--theta {theta:g} is not a threshold of {sweep.path.name}: one of "
+    if theta not in sweep.grid["theta"]:  # every digit: 80.0000001 is not 80
+        raise SweepError(f"--theta {theta:.15g} is not a threshold of {sweep.path.name}: one of "
                          f"{', '.join(f'{value:g}' for value in sweep.grid['theta'])}")
 
 

@@ -117,6 +117,8 @@ def test_figure_19_shows_the_best_theta_by_default_and_the_one_theta_names(quick
 
 @pytest.mark.parametrize("arguments, message", [
     (["fig19", "--theta", "75"], "--theta 75 is not a threshold of thresholds.toml: one of 50, 60, 70, 80, 90, 100"),
+    (["fig19", "--theta", "80.0000001"], "--theta 80.0000001 is not a threshold of thresholds.toml: one of 50,"),
+    (["fig19", "--theta", "nan"], "--theta nan is not a threshold of thresholds.toml: one of 50,"),
     (["fig16", "--theta", "80"], "--theta 80 chooses Figure 19's threshold: reproduce fig19 (or all) with it"),
     (["fig19", "--theta", "80", "--redraw"], "--theta 80 chooses the runs in fig19's tables, which --redraw"),
     (["fig19", "--theta", "80", "--check"], "--check re-runs runs and --theta chooses what fig19 draws"),

@@ -83,7 +83,7 @@ def write(run_dir, out) -> Path:
     """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
-    table that cannot be read, or if ``out`` cannot be written (a folder, a missing or
+    table that is another run's or cannot be read, or if ``out`` cannot be written (a folder, a missing or
     read-only parent, a file of a run folder other than its ``replay.html``, ...).
     """
     import pyarrow as pa

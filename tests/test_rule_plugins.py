@@ -18,7 +18,7 @@ from conftest import ALWAYS, NEVER, run_state, scenario, scenario_config
 import dronefleet
 from dronefleet import cli
 from dronefleet.delivery import simulation
-from dronefleet.delivery.auction import PLUGIN, resolve_rule
+from dronefleet.delivery.auction import PLUGIN, RuleError, resolve_rule
 
 REPO = Path(dronefleet.__file__).resolve().parent.parent
 EXAMPLE = REPO / "examples" / "dronefleet-rule-fullest-battery"
@@ -119,7 +119,9 @@ def rules_module(tmp_path, monkeypatch):
     ("{m}:no_bids_on", ("has bids_on = None; set the function's attribute bids_on to one of 'policy', "
                         "'soc_threshold', 'any'")),
     ("{m}:bids_sometimes", "has bids_on = 'sometimes'"),
-    ("{m}:three_values", "does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float)"),
+    ("{m}:three_values", ("does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float) with floats and a "
+                          "numpy Generator: No conversion from Tuple(Literal[bool](True), float64, float64) to "
+                          "Tuple(bool, float64)")),
     ("{m}:two_arguments", "does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float)"),
     ("{m}:listed_bids_on", "has bids_on = ['policy']; set the function's attribute bids_on to one of"),
     ("{m}:unready", "names 'unready', which module '{m}' fails to give (RuntimeError: unready is not ready)"),
@@ -151,6 +153,13 @@ def test_an_entry_point_and_its_dotted_path_are_the_same_plugin(rules_module):
     assert by_name.code == by_path.code == PLUGIN
     assert by_name.kernel is by_path.kernel and by_name.bids_on == "policy"
     assert resolve_rule("most_confident").code != PLUGIN  # built-ins keep their static dispatch
+
+
+def test_a_rule_that_does_not_compile_is_refused_naming_the_plugins_line(rules_module):
+    with pytest.raises(RuleError) as refused:
+        resolve_rule(f"{rules_module}:three_values")
+    line = RULES_MODULE.splitlines().index("    return True, soc, 1.0") + 1  # three_values' return
+    assert str(refused.value).endswith(f'{rules_module}.py", line {line})'), str(refused.value)
 
 
 def test_an_entry_point_named_like_a_built_in_rule_is_not_used_and_said_so(tmp_path, monkeypatch, caplog):

@@ -234,9 +234,12 @@ def _checked(kernel) -> Rule:
         # With the return type given, numba converts what the rule returns (a literal True, an int score).
         kernel.compile(RULE_SIGNATURE)
     except (NumbaError, TypeError) as e:  # TypeError: another number of arguments
-        first = str(e).strip().splitlines()[0]
+        lines = [line.strip() for line in str(e).splitlines() if line.strip()] or [type(e).__name__]
+        # numba's first line names its failed pass; the cause and the plugin's line come after it
+        cause = next((line for line in lines if not line.startswith("Failed in ")), lines[0])
+        where = next((f" ({line.rstrip(':')})" for line in lines if line.startswith("File ")), "")
         raise RuleError(f"does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float) with floats "
-                        f"and a numpy Generator: {first}") from None
+                        f"and a numpy Generator: {cause}{where}") from None
     # An earlier call with the same arguments may have compiled it to return something else.
     returns = kernel.overloads[RULE_ARGS].signature.return_type
     if returns != RULE_SIGNATURE.return_type:

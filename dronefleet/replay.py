@@ -84,7 +84,7 @@ def write(run_dir, out) -> Path:
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
     table that is another run's or cannot be read, or if ``out`` cannot be written (a folder, a missing or
-    read-only parent, a file of a run folder other than its ``replay.html``, ...).
+    read-only parent, a file in a run folder other than ``run_dir``'s own ``replay.html``, ...).
     """
     import pyarrow as pa
 
@@ -94,11 +94,13 @@ def write(run_dir, out) -> Path:
         raise ConfigError(f"--out {str(out)!r} is a folder; give the page's file name, e.g. {out / REPLAY_FILE}")
     if not out.parent.is_dir():
         raise ConfigError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
-    # any other file in a run folder would overwrite a table or make the folder no longer a run
-    if out.name != REPLAY_FILE and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
-                                       for s in scenarios.SCENARIOS.values()):
-        raise ConfigError(f"--out {str(out)!r} lies in a run folder, where the page can only be "
-                          f"{str(out.parent / REPLAY_FILE)!r}; choose that or a file outside it")
+    # in a run folder, any other file would overwrite a table, make the folder no longer a run,
+    # or pass for that run's page
+    own_page = out.name == REPLAY_FILE and out.parent.resolve() == run_dir.resolve()
+    if not own_page and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
+                            for s in scenarios.SCENARIOS.values()):
+        raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
+                          f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
     try:
         data = scenario.replay_data(run_dir)
     except (OSError, pa.ArrowException) as error:  # a table whose data (not its footer) is corrupt

@@ -220,14 +220,16 @@ def test_run_replay_of_a_run_too_large_to_play_is_refused_before_the_run(tmp_pat
     assert (tmp_path / "run" / REPLAY_FILE).is_file()
 
 
-def test_a_page_is_never_written_over_a_table_or_beside_one_under_another_name(tmp_path, capsys, delivery_run,
+def test_a_page_is_never_written_over_a_table_nor_into_another_runs_folder(tmp_path, capsys, delivery_run,
                                                                               replenishment_run):
     summary = (delivery_run / "summary.parquet").read_bytes()
-    _refused(capsys, ["replay", str(delivery_run), "--out", str(delivery_run / "summary.parquet")],
-             "lies in a run folder, where the page can only be")
-    _refused(capsys, ["replay", str(delivery_run), "--out", str(replenishment_run / "page.html")],
-             f"{str(replenishment_run / REPLAY_FILE)!r}")
+    page = (replenishment_run / REPLAY_FILE).read_bytes()
+    for out in (delivery_run / "summary.parquet", replenishment_run / "page.html", replenishment_run / REPLAY_FILE):
+        _refused(capsys, ["replay", str(delivery_run), "--out", str(out)],
+                 f"lies in a run folder, where only that run's own page may go: give "
+                 f"{str(delivery_run / REPLAY_FILE)!r} or a file outside any run folder")
     assert (delivery_run / "summary.parquet").read_bytes() == summary
+    assert (replenishment_run / REPLAY_FILE).read_bytes() == page
     assert run_dir_state(replenishment_run, ("summary", "timeseries")) == "complete"
 
 

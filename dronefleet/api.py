@@ -23,6 +23,7 @@ or a table is asked for.
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import tempfile
@@ -33,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 from . import scenarios
 from .config import ConfigError, _show
 from .scenarios import Scenario
-from .sweeps import available_cpus, collect, run_sweep, sweep_of_document
+from .sweeps import MAX_RUNS, available_cpus, collect, run_sweep, sweep_of_document
 
 if TYPE_CHECKING:
     import pandas
@@ -222,6 +223,17 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
     return Run(scenario, resolved, scenario.simulate(resolved))
 
 
+def _bounded_list(values: Iterable, argument: str, what: str) -> list:
+    """``values`` as a list, refused if it holds more than a sweep may run: never built whole
+    (``range(10**12)`` would exhaust memory, an endless iterator never end)."""
+    shown = _show(values)  # before an iterator is advanced
+    listed = list(itertools.islice(values, MAX_RUNS + 1))
+    if len(listed) > MAX_RUNS:
+        raise ConfigError(f"{argument}={shown}: more than {MAX_RUNS:,} {what}; a sweep may hold at most "
+                          f"{MAX_RUNS:,} runs")
+    return listed
+
+
 def _grid(grid: Any) -> dict | list[dict]:
     """A ``grid`` argument as a sweep file's ``[grid]`` (one dict) or ``[[grid]]`` (a list of
     dicts): tuples and ranges of values become lists; the machinery checks the rest."""
@@ -229,7 +241,8 @@ def _grid(grid: Any) -> dict | list[dict]:
         if not isinstance(table, Mapping):
             raise ConfigError(f"grid={_show(grid)}: expected a dict of config keys to lists of values, "
                               "e.g. {'rule': ['least_confident', 'random']}, or a list of such dicts")
-        return {key: list(values) if isinstance(values, (tuple, range)) else values for key, values in table.items()}
+        return {key: _bounded_list(values, f"grid[{key!r}]", "values") if isinstance(values, (tuple, range))
+                else values for key, values in table.items()}
 
     return [product(table) for table in grid] if isinstance(grid, list) else product(grid)
 
@@ -237,7 +250,7 @@ def _grid(grid: Any) -> dict | list[dict]:
 def _seed_list(seeds: Any) -> list:
     if isinstance(seeds, (str, bytes, Mapping)) or not isinstance(seeds, Iterable):
         raise ConfigError(f"seeds={_show(seeds)}: expected a list of integers, e.g. [0, 1] or range(20)")
-    return list(seeds)
+    return _bounded_list(seeds, "seeds", "seeds")
 
 
 def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds: Iterable[int] | None = None,

@@ -103,6 +103,10 @@ def run(args: argparse.Namespace) -> int:
         return run_scenario(scenario, args)
     overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
     config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
+    if args.replay:
+        from .delivery.replay import check_replayable
+
+        check_replayable(config)
     name = Path(args.config).stem if args.config else "paper"
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 
@@ -227,6 +231,15 @@ class _Commands(argparse._SubParsersAction):
     def add_parser(self, name, **kwargs):
         kwargs["parents"] = [*kwargs.get("parents", ()), _verbosity(argparse.SUPPRESS)]
         return super().add_parser(name, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        # the command's flags replace those before it: -q before and -v after (or the reverse)
+        # would pass each parser's own check, and one of them would be dropped unsaid
+        before = getattr(namespace, "level", None)
+        super().__call__(parser, namespace, values, option_string)
+        if before not in (None, logging.INFO) and namespace.level != before:  # INFO: no flag given
+            raise argparse.ArgumentError(None, "-q/--quiet and -v/--verbose are not allowed together "
+                                               "(before the command or after it)")
 
 
 class _Parser(argparse.ArgumentParser):

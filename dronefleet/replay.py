@@ -26,23 +26,39 @@ __all__ = ["scenario_of_run", "page", "write"]
 TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
 
 
-def scenario_of_run(run_dir: str | os.PathLike) -> scenarios.Scenario:
-    """The scenario whose complete run folder ``run_dir`` is; ConfigError (one line) otherwise."""
+def _config_text(table_path: Path) -> bytes | None:
+    """The config a run's table carries (JSON bytes), or None: absent, not parquet, cut short."""
     import pyarrow.parquet as pq
 
+    try:
+        return pq.read_schema(table_path).metadata[CONFIG_KEY]
+    except (OSError, KeyError, TypeError, ValueError):  # ArrowInvalid is a ValueError
+        return None
+
+
+def scenario_of_run(run_dir: str | os.PathLike) -> scenarios.Scenario:
+    """The scenario whose complete run folder ``run_dir`` is; ConfigError (one line) otherwise."""
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is {'a file' if run_dir.exists() else 'missing'}; "
                           "give a folder that dronefleet run wrote")
+    text = _config_text(run_dir / "summary.parquet")
     try:
-        config = json.loads(pq.read_schema(run_dir / "summary.parquet").metadata[CONFIG_KEY])
-    except (OSError, KeyError, TypeError, ValueError):  # absent, not parquet, no config in it
+        config = json.loads(text)
+    except (TypeError, ValueError):
+        config = None
+    if not isinstance(config, dict):  # no config, or JSON that is no config
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a run folder: it has no summary.parquet "
-                          "written by dronefleet run") from None
+                          "written by dronefleet run")
     scenario = scenarios.get(config.get(SCENARIO_KEY, "delivery"), f"RUN_DIR {str(run_dir)!r}: ")
     if run_dir_state(run_dir, scenario.tables) != "complete":
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a complete {scenario.name} run folder: it must "
                           f"hold exactly {', '.join(f'{name}.parquet' for name in scenario.tables)}")
+    # every table of a run carries its config: a table of another run (or cut short) has another or none
+    strays = [f"{name}.parquet" for name in scenario.tables if _config_text(run_dir / f"{name}.parquet") != text]
+    if strays:
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r}: {', '.join(strays)} not of the run in summary.parquet "
+                          "(another run's config, or unreadable); write the run again with dronefleet run")
     return scenario
 
 
@@ -68,15 +84,31 @@ def page(data: dict[str, Any], scene_script: str) -> str:
 def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
     """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
 
-    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or ``out``
-    cannot be written (a folder, a missing or read-only parent, ...).
+    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
+    table that is another run's or cannot be read, or if ``out`` cannot be written (a folder, a missing or
+    read-only parent, a file in a run folder other than ``run_dir``'s own ``replay.html``, ...).
     """
+    import pyarrow as pa
+
     run_dir, out = Path(run_dir), Path(out)
     scenario = scenario_of_run(run_dir)
     if out.is_dir():
         raise ConfigError(f"--out {str(out)!r} is a folder; give the page's file name, e.g. {out / REPLAY_FILE}")
     if not out.parent.is_dir():
         raise ConfigError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
-    html = page(scenario.replay_data(run_dir), scenario.replay_script)
+    # in a run folder, any other file would overwrite a table, make the folder no longer a run,
+    # or pass for that run's page
+    own_page = out.name == REPLAY_FILE and out.parent.resolve() == run_dir.resolve()
+    if not own_page and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
+                            for s in scenarios.SCENARIOS.values()):
+        raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
+                          f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
+    try:
+        data = scenario.replay_data(run_dir)
+    except (OSError, pa.ArrowException) as error:  # a table whose data (not its footer) is corrupt
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r} holds a table that cannot be read as a {scenario.name} "
+                          f"run's ({first}); write the run again with dronefleet run") from None
+    html = page(data, scenario.replay_script)
     with writing(out):
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))

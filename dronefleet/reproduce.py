@@ -55,6 +55,7 @@ import pyarrow.parquet as pq
 
 from .config import shipped_config
 from .delivery import analysis
+from .outputs import probe_folders
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
@@ -342,8 +343,8 @@ def _check_theta(study, figures, redraw):
         raise SweepError(f"--theta {theta:g} chooses the runs in fig19's tables, which --redraw only draws: "
                          "give one of them")
     sweep = study.sweep("thresholds")
-    if theta not in sweep.grid["theta"]:
-        raise SweepError(f"--theta {theta:g} is not a threshold of {sweep.path.name}: one of "
+    if theta not in sweep.grid["theta"]:  # every digit: 80.0000001 is not 80
+        raise SweepError(f"--theta {theta:.15g} is not a threshold of {sweep.path.name}: one of "
                          f"{', '.join(f'{value:g}' for value in sweep.grid['theta'])}")
 
 
@@ -365,6 +366,7 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
         raise SweepError(str(error)) from None
     study = Study(out, quick, jobs, log, theta)
     _check_theta(study, figures, redraw)
+    probe_folders([study.root])  # a root under a file or not writable: one line, not a traceback at the first run
     if not redraw:
         replenishment.run_together(study, [figure for figure in figures if figure in REPLENISHMENT_FIGURES])
     drawn = {}
@@ -443,6 +445,13 @@ def command(args: argparse.Namespace) -> int:
     root = args.out or (COMMITTED_RESULTS if args.update_results or args.check else DEFAULT_OUT)
     if root.exists() and not root.is_dir():
         raise SweepError(f"--out {str(root)!r} is a file: give the folder to write the results under")
+    if args.update_results and not COMMITTED_RESULTS.is_dir():  # it would start a results/ of its own here
+        raise SweepError(f"--update-results refreshes the committed {COMMITTED_RESULTS}/, and {str(Path.cwd())!r} "
+                         "has none: run it from the repository's root, or write elsewhere with --out DIR")
+    if args.out is not None and not args.check and COMMITTED_RESULTS.is_dir() and root.resolve() == \
+            COMMITTED_RESULTS.resolve():
+        raise SweepError(f"--out {str(root)!r} is the committed {COMMITTED_RESULTS}/: refresh them with "
+                         "--update-results, or write elsewhere with another --out")
     start = time.perf_counter()
     if args.check:
         if args.redraw:

@@ -245,8 +245,18 @@ def _parameters(table, scenario: Scenario, where: str) -> dict:
 
 
 def _repeated(values: list):
-    """The first value that equals an earlier one (15 equals 15.0), or None."""
-    return next((v for i, v in enumerate(values) if v in values[:i]), None)
+    """The first value that equals an earlier one (15 equals 15.0), or None; in one pass over
+    hashable values, as a grid of 100,000 values must not take minutes to check."""
+    seen = set()  # equal numbers hash alike: 15 and 15.0 meet here too
+    for i, value in enumerate(values):
+        try:
+            if value in seen:
+                return value
+            seen.add(value)
+        except TypeError:  # unhashable (a list): compared with every earlier value
+            if value in values[:i]:
+                return value
+    return None
 
 
 def _products(grid, scenario: Scenario, where: str) -> list[tuple[str, dict[str, list]]]:

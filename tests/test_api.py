@@ -3,6 +3,7 @@ run is the CLI's run folder byte for byte, overrides reach the config, a sweep's
 single runs' summaries, and bad arguments are one-line ValueErrors before any work."""
 
 import doctest
+import itertools
 import json
 import re
 import subprocess
@@ -131,6 +132,12 @@ def test_a_replenishment_sweep_has_a_row_per_trial_of_each_run():
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], set={"rule": "random"}), r"rule is both fixed"),
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], base="replenishment"), r"unknown key 'rule'"),
     (lambda: dronefleet.sweep({"n_uavs": [0]}, seeds=[0]), r"\[grid\] at n_uavs = 0: .*n_uavs"),
+    # sizes the CLI's cap refuses are refused here too, and before a list of them is built
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=range(10**12)),
+     r"seeds=range\(0, 1000000000000\): more than 100,000 seeds; a sweep may hold at most 100,000 runs"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=itertools.count()), r"seeds=count\(0\): more than"),
+    (lambda: dronefleet.sweep({"tau_minutes": range(1, 10**12)}, seeds=[0]),
+     r"grid\['tau_minutes'\]=range\(1, 1000000000000\): more than 100,000 values"),
 ], ids=lambda value: None if callable(value) else "")
 def test_bad_arguments_are_one_line_value_errors_before_any_work(call, message):
     with pytest.raises(ConfigError, match=message) as refused:

@@ -97,10 +97,22 @@ def test_a_configs_path_missing_here_names_the_shipped_file(tmp_path, capsys, mo
     assert "shipped" not in capsys.readouterr().err
 
 
-def test_quiet_and_verbose_together_are_refused(capsys):
+@pytest.mark.parametrize("argv, fragment", [
+    (["run", "-q", "-v"], "not allowed with argument"),
+    (["-q", "run", "-v"], "-q/--quiet and -v/--verbose are not allowed together"),
+    (["-v", "sweep", "status", "x.toml", "--quiet"], "-q/--quiet and -v/--verbose are not allowed together"),
+    (["sweep", "-v", "status", "x.toml", "-q"], "-q/--quiet and -v/--verbose are not allowed together"),
+])
+def test_quiet_and_verbose_together_are_refused(argv, fragment, capsys):
     with pytest.raises(SystemExit) as end:
-        cli.main(["run", "-q", "-v"])
-    assert end.value.code == 2 and "not allowed with argument" in capsys.readouterr().err
+        cli.main(argv)
+    err = capsys.readouterr().err
+    assert end.value.code == 2 and err.count("\n") == 1 and fragment in err, err
+
+
+def test_the_same_level_before_and_after_the_command_is_that_level(tmp_path, capsys):
+    assert cli.main(["-q", "run", *SHORT, "--out", str(tmp_path / "run"), "-q"]) == 0
+    assert capsys.readouterr().out == ""
 
 
 def test_python_dash_m_dronefleet_is_the_command():

@@ -216,6 +216,30 @@ def test_the_runs_cap_is_a_bound_on_the_runs_of_the_product(monkeypatch):
         sw.load_sweep(SMOKE)
 
 
+class Counted:
+    """A grid value that counts the comparisons made with it (all equal in hash, none equal)."""
+
+    comparisons = 0
+
+    def __init__(self, n):
+        self.n = n
+
+    def __hash__(self):
+        return self.n
+
+    def __eq__(self, other):
+        Counted.comparisons += 1
+        return self is other
+
+
+def test_repeated_grid_values_are_found_without_comparing_every_pair():
+    # 100,000 values (the cap) compared pairwise took minutes before the cap was even checked
+    values = [Counted(n) for n in range(2000)]
+    assert sw._repeated(values) is None
+    assert Counted.comparisons < len(values)
+    assert sw._repeated([15, "a", [1], 15.0]) == 15.0 and sw._repeated([[1], [1]]) == [1]
+
+
 def snapshot(root):
     """Every path under ``root``, with the size and modification time of each file."""
     return {path: (path.stat().st_size, path.stat().st_mtime_ns) if path.is_file() else "folder"

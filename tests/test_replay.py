@@ -1,6 +1,7 @@
 """The replay page: its data follows the run's tables, it is self-contained, the command refuses
 bad input in one line, and it plays in a real browser (headless Chromium) without an error."""
 
+import importlib
 import json
 import re
 import shutil
@@ -11,10 +12,12 @@ import pyarrow.parquet as pq
 import pytest
 
 from dronefleet import cli, replay
+from dronefleet.delivery import replay as delivery_replay
 from dronefleet.delivery.replay import replay_data as delivery_data
-from dronefleet.records import REPLAY_FILE, run_dir_state
+from dronefleet.records import CONFIG_KEY, REPLAY_FILE, run_dir_state
 from dronefleet.replenishment import Params, simulate
 from dronefleet.replenishment.kernel import BASE, TRANSFER, WORK, floor_colour
+from dronefleet.replenishment import replay as replay_module
 from dronefleet.replenishment.replay import AREAS
 from dronefleet.replenishment.replay import replay_data as replenishment_data
 
@@ -95,6 +98,23 @@ def test_replenishment_replay_is_the_runs_first_trial(replenishment_run):
     assert max(map(abs, data["x"] + data["y"])) <= data["wall_m"]
 
 
+def test_a_long_replenishment_run_is_replayed_from_the_frames_alone(replenishment_run, monkeypatch):
+    # 91 samples, at most 7 frames: every 13th sample. Only those are tracked, not all 91
+    # (a long run's every sample would exhaust memory), and they are the same.
+    full = replenishment_data(replenishment_run)
+    monkeypatch.setattr(replay_module, "MAX_FRAMES", 7)
+    tracked = []
+    module = importlib.import_module("dronefleet.replenishment.simulate")  # the package's name is the function
+    monkeypatch.setattr(module, "simulate",
+                        lambda p, **k: tracked.append(p.sample_every) or simulate(p, **k))
+    data = replenishment_data(replenishment_run)
+    assert tracked == [130]
+    assert data["frame_s"] == 13.0 and len(data["work"]) == 7
+    assert data["work"] == full["work"][::13] and data["stored"] == full["stored"][::13]
+    for name in ("x", "y", "energy", "phase"):
+        assert data[name] == np.reshape(full[name], (91, 12))[::13].reshape(-1).tolist(), name
+
+
 def test_the_track_changes_no_output_and_agrees_with_the_time_series():
     params = Params(strategy="mobile", n_workers=4, n_chargers=3, ticks=700, trials=2, sample_every=7)
     plain, tracked = simulate(params), simulate(params, track=True)
@@ -148,6 +168,69 @@ def test_bad_run_folders_are_refused_in_one_line(tmp_path, capsys, delivery_run)
     shutil.copytree(delivery_run, partial)
     (partial / "fleet.parquet").unlink()
     _refused(capsys, ["replay", str(partial)], "not a complete delivery run folder")
+    shutil.copy(delivery_run / "fleet.parquet", partial)
+    summary = pq.read_table(partial / "summary.parquet")
+    pq.write_table(summary.replace_schema_metadata({CONFIG_KEY: "[]"}), partial / "summary.parquet")
+    _refused(capsys, ["replay", str(partial)], "is not a run folder: it has no summary.parquet written by")
+
+
+@pytest.mark.parametrize("damage, fragment", [
+    ("cut short", "orders.parquet not of the run in summary.parquet (another run's config, or unreadable)"),
+    ("of the other scenario", "timeseries.parquet not of the run in summary.parquet"),
+    ("of another run", "orders.parquet not of the run in summary.parquet"),
+    ("corrupt inside", "holds a table that cannot be read as a delivery run's (Couldn't deserialize thrift"),
+])
+def test_a_run_folder_with_an_unreadable_or_stray_table_is_refused_in_one_line(damage, fragment, tmp_path, capsys,
+                                                                              delivery_run, replenishment_run):
+    damaged = tmp_path / "run"
+    shutil.copytree(delivery_run, damaged)
+    orders = damaged / "orders.parquet"
+    data = orders.read_bytes()
+    if damage == "cut short":
+        orders.write_bytes(data[:len(data) // 2])
+    elif damage == "of the other scenario":
+        shutil.copy(replenishment_run / "timeseries.parquet", damaged / "timeseries.parquet")
+    elif damage == "of another run":  # the same columns, fewer orders: the attempts would index past them
+        assert cli.main(["run", "--set", "horizon_weeks=0.01", "--set", "n_uavs=2", "--out", str(tmp_path / "o")]) == 0
+        shutil.copy(tmp_path / "o" / "orders.parquet", orders)
+    else:  # the first page's header overwritten, the footer (schema and config) intact
+        orders.write_bytes(data[:4] + b"\xab" * 64 + data[4 + 64:])
+    capsys.readouterr()
+    _refused(capsys, ["replay", str(damaged), "--out", str(tmp_path / "page.html")], fragment)
+    assert not (tmp_path / "page.html").exists()
+
+
+def test_a_run_too_large_to_play_is_refused_in_one_line_before_its_tables_are_read(tmp_path, capsys, delivery_run,
+                                                                                  monkeypatch):
+    flights = pq.ParquetFile(delivery_run / "attempts.parquet").metadata.num_rows
+    monkeypatch.setattr(delivery_replay, "MAX_FLIGHTS", flights - 1)
+    monkeypatch.setattr(pq, "read_table", lambda *a, **k: pytest.fail("a table was read"))
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "page.html")],
+             f"has {flights:,} attempts; a replay page draws at most {flights - 1:,}")
+    assert not (tmp_path / "page.html").exists()
+
+
+def test_run_replay_of_a_run_too_large_to_play_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(delivery_replay, "MAX_FLIGHTS", 100)  # 0.1 weeks at tau 15 min: ~67 orders
+    _refused(capsys, ["run", "--set", "horizon_weeks=0.3", "--out", str(tmp_path / "run"), "--replay"],
+             "--replay: the run would hold ~2e+02 orders and a replay page draws at most 100 attempts")
+    assert not (tmp_path / "run").exists()
+    assert cli.main(["run", "--set", "horizon_weeks=0.1", "--set", "n_uavs=5", "--out", str(tmp_path / "run"),
+                     "--replay"]) == 0
+    assert (tmp_path / "run" / REPLAY_FILE).is_file()
+
+
+def test_a_page_is_never_written_over_a_table_nor_into_another_runs_folder(tmp_path, capsys, delivery_run,
+                                                                              replenishment_run):
+    summary = (delivery_run / "summary.parquet").read_bytes()
+    page = (replenishment_run / REPLAY_FILE).read_bytes()
+    for out in (delivery_run / "summary.parquet", replenishment_run / "page.html", replenishment_run / REPLAY_FILE):
+        _refused(capsys, ["replay", str(delivery_run), "--out", str(out)],
+                 f"lies in a run folder, where only that run's own page may go: give "
+                 f"{str(delivery_run / REPLAY_FILE)!r} or a file outside any run folder")
+    assert (delivery_run / "summary.parquet").read_bytes() == summary
+    assert (replenishment_run / REPLAY_FILE).read_bytes() == page
+    assert run_dir_state(replenishment_run, ("summary", "timeseries")) == "complete"
 
 
 def test_unwritable_pages_are_refused_in_one_line(tmp_path, capsys, delivery_run, monkeypatch):

@@ -117,6 +117,8 @@ def test_figure_19_shows_the_best_theta_by_default_and_the_one_theta_names(quick
 
 @pytest.mark.parametrize("arguments, message", [
     (["fig19", "--theta", "75"], "--theta 75 is not a threshold of thresholds.toml: one of 50, 60, 70, 80, 90, 100"),
+    (["fig19", "--theta", "80.0000001"], "--theta 80.0000001 is not a threshold of thresholds.toml: one of 50,"),
+    (["fig19", "--theta", "nan"], "--theta nan is not a threshold of thresholds.toml: one of 50,"),
     (["fig16", "--theta", "80"], "--theta 80 chooses Figure 19's threshold: reproduce fig19 (or all) with it"),
     (["fig19", "--theta", "80", "--redraw"], "--theta 80 chooses the runs in fig19's tables, which --redraw"),
     (["fig19", "--theta", "80", "--check"], "--check re-runs runs and --theta chooses what fig19 draws"),
@@ -244,6 +246,33 @@ def test_out_and_update_results_exclude_each_other(tmp_path, capsys):
         cli.main(["reproduce", "fig17", "--out", str(tmp_path), "--update-results"])
     assert exit.value.code == 2
     assert "not allowed with argument" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("redraw", [[], ["--redraw"]])
+def test_an_out_under_a_file_is_refused_in_one_line(redraw, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(reproduce.replenishment, "run_together", lambda *a: pytest.fail("a figure ran"))
+    (tmp_path / "notes.txt").write_text("mine\n")
+    assert cli.main(["reproduce", "fig10", "--quick", "--out", str(tmp_path / "notes.txt" / "results"), *redraw]) == 2
+    assert capsys.readouterr().err == (f"dronefleet: error: cannot write "
+                                       f"{str(tmp_path / 'notes.txt' / 'results' / 'quick')!r}: Not a directory\n")
+    assert (tmp_path / "notes.txt").read_text() == "mine\n"
+
+
+def test_committed_results_are_written_only_with_update_results_and_only_where_they_are(tmp_path, monkeypatch,
+                                                                                         capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(reproduce, "reproduce", lambda *a, **k: pytest.fail("reproduce ran"))
+    assert cli.main(["reproduce", "fig17", "--quick", "--update-results"]) == 2
+    assert capsys.readouterr().err == (f"dronefleet: error: --update-results refreshes the committed results/, and "
+                                       f"{str(tmp_path)!r} has none: run it from the repository's root, or write "
+                                       "elsewhere with --out DIR\n")
+    (tmp_path / "results").mkdir()
+    for out in ("results", str(tmp_path / "results"), "results/../results"):
+        assert cli.main(["reproduce", "fig17", "--quick", "--out", out]) == 2
+        assert capsys.readouterr().err == (f"dronefleet: error: --out {str(Path(out))!r} is the committed results/: "
+                                           "refresh them with --update-results, or write elsewhere with another "
+                                           "--out\n")
+    assert not any((tmp_path / "results").iterdir())
 
 
 def test_an_out_that_is_a_file_is_refused_in_one_line(tmp_path, capsys):

@@ -18,7 +18,7 @@ from conftest import ALWAYS, NEVER, run_state, scenario, scenario_config
 import dronefleet
 from dronefleet import cli
 from dronefleet.delivery import simulation
-from dronefleet.delivery.auction import PLUGIN, resolve_rule
+from dronefleet.delivery.auction import PLUGIN, RuleError, resolve_rule
 
 REPO = Path(dronefleet.__file__).resolve().parent.parent
 EXAMPLE = REPO / "examples" / "dronefleet-rule-fullest-battery"
@@ -74,6 +74,20 @@ def two_arguments(f, soc):
 
 
 two_arguments.bids_on = "any"
+
+
+@njit
+def listed_bids_on(f, w_norm, soc, theta, rng):
+    return True, soc
+
+
+listed_bids_on.bids_on = ["policy"]
+
+
+def __getattr__(name):
+    if name == "unready":
+        raise RuntimeError(f"{name} is not ready")
+    raise AttributeError(name)
 """
 
 
@@ -105,8 +119,12 @@ def rules_module(tmp_path, monkeypatch):
     ("{m}:no_bids_on", ("has bids_on = None; set the function's attribute bids_on to one of 'policy', "
                         "'soc_threshold', 'any'")),
     ("{m}:bids_sometimes", "has bids_on = 'sometimes'"),
-    ("{m}:three_values", "does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float)"),
+    ("{m}:three_values", ("does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float) with floats and a "
+                          "numpy Generator: No conversion from Tuple(Literal[bool](True), float64, float64) to "
+                          "Tuple(bool, float64)")),
     ("{m}:two_arguments", "does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float)"),
+    ("{m}:listed_bids_on", "has bids_on = ['policy']; set the function's attribute bids_on to one of"),
+    ("{m}:unready", "names 'unready', which module '{m}' fails to give (RuntimeError: unready is not ready)"),
     ("broken_rule", ("is an entry point of dronefleet.winner_rules ({m}_missing:rule) that fails to load: "
                      "ModuleNotFoundError")),
 ])
@@ -135,6 +153,23 @@ def test_an_entry_point_and_its_dotted_path_are_the_same_plugin(rules_module):
     assert by_name.code == by_path.code == PLUGIN
     assert by_name.kernel is by_path.kernel and by_name.bids_on == "policy"
     assert resolve_rule("most_confident").code != PLUGIN  # built-ins keep their static dispatch
+
+
+def test_a_rule_that_does_not_compile_is_refused_naming_the_plugins_line(rules_module):
+    with pytest.raises(RuleError) as refused:
+        resolve_rule(f"{rules_module}:three_values")
+    line = RULES_MODULE.splitlines().index("    return True, soc, 1.0") + 1  # three_values' return
+    assert str(refused.value).endswith(f'{rules_module}.py", line {line})'), str(refused.value)
+
+
+def test_an_entry_point_named_like_a_built_in_rule_is_not_used_and_said_so(tmp_path, monkeypatch, caplog):
+    dist = tmp_path / "shadow-0.1.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: shadow\nVersion: 0.1\n")
+    (dist / "entry_points.txt").write_text("[dronefleet.winner_rules]\nthreshold = shadow:lowest_soc\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert resolve_rule("threshold").code != PLUGIN
+    assert "entry point 'threshold' (shadow:lowest_soc) is not used: 'threshold' is the built-in rule" in caplog.text
 
 
 def test_the_example_rule_gives_the_order_to_the_fullest_bidder(monkeypatch):

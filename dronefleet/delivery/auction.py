@@ -41,7 +41,8 @@ The engine receives a plugin as a first-class function (numba ``FunctionType`` o
 ``RULE_SIGNATURE``): one compilation of the engine, disk-cached like the built-in one,
 serves every plugin, and calls the plugin through a pointer (no inlining). Each process
 compiles the plugin itself once unless it is ``cache=True``. :func:`resolve_rule` loads
-and checks a rule by name. Plugins cannot be ``base_rule`` of ``reservation``.
+and checks a rule by name. Plugins cannot be ``base_rule`` of ``reservation``. An entry
+point named like a built-in rule is not used (a warning says so): its dotted path is.
 
 ``reservation`` (docs/delivery-model.md section 9) is not a kernel of this kind: it lets a base rule
 (config ``base_rule``) resolve the immediate bids and adds reservation bids, whose
@@ -50,6 +51,7 @@ forecast is :func:`reservation_wait`; the engine runs the two phases.
 
 import functools
 import importlib
+import logging
 from importlib.metadata import entry_points
 from typing import NamedTuple
 
@@ -60,6 +62,8 @@ from numba.core.errors import NumbaError
 
 from ..config import _suggest
 from ..fpmath import log
+
+logger = logging.getLogger(__name__)  # not ``log``: that is fpmath's logarithm here
 
 BIDS_ON = {"policy": 0, "soc_threshold": 1, "any": 2}
 
@@ -167,8 +171,18 @@ def resolve_rule(name: str) -> Rule:
     Raises :class:`RuleError` saying what is wrong and what is allowed.
     """
     if name in RULES:
+        _warn_if_shadowed(name)
         return RULES[name]
     return _plugin(name)
+
+
+@functools.cache  # once per name and process: validation resolves the rule of every run
+def _warn_if_shadowed(name: str) -> None:
+    """Warn that an entry point named like the built-in rule ``name`` is not what runs."""
+    for entry_point in entry_points(group=ENTRY_POINT_GROUP, name=name):
+        logger.warning(f"dronefleet: warning: the {ENTRY_POINT_GROUP} entry point {name!r} ({entry_point.value}) "
+                       f"is not used: {name!r} is the built-in rule; name the plugin by its path "
+                       f"{entry_point.value!r}")
 
 
 @functools.cache  # successes only: a failed lookup raises, and is tried again next time
@@ -202,6 +216,9 @@ def _import_path(path: str):
         return functools.reduce(getattr, attribute.split("."), module)
     except AttributeError:
         raise RuleError(f"names {attribute!r}, which module {module_name!r} does not have") from None
+    except Exception as e:  # a module __getattr__ or property of the plugin's that raises
+        raise RuleError(f"names {attribute!r}, which module {module_name!r} fails to give "
+                        f"({type(e).__name__}: {e})") from None
 
 
 def _checked(kernel) -> Rule:
@@ -210,16 +227,19 @@ def _checked(kernel) -> Rule:
         raise RuleError(f"is a {type(kernel).__name__}, not a numba @njit function "
                         "rule(f, w_norm, soc, theta, rng) -> (bool, float)")
     bids_on = getattr(kernel, "bids_on", None)
-    if bids_on not in BIDS_ON:
+    if not isinstance(bids_on, str) or bids_on not in BIDS_ON:  # a list would not even hash
         raise RuleError(f"has bids_on = {bids_on!r}; set the function's attribute bids_on to one of "
                         f"{', '.join(map(repr, BIDS_ON))} (see dronefleet.delivery.auction)")
     try:
         # With the return type given, numba converts what the rule returns (a literal True, an int score).
         kernel.compile(RULE_SIGNATURE)
     except (NumbaError, TypeError) as e:  # TypeError: another number of arguments
-        first = str(e).strip().splitlines()[0]
+        lines = [line.strip() for line in str(e).splitlines() if line.strip()] or [type(e).__name__]
+        # numba's first line names its failed pass; the cause and the plugin's line come after it
+        cause = next((line for line in lines if not line.startswith("Failed in ")), lines[0])
+        where = next((f" ({line.rstrip(':')})" for line in lines if line.startswith("File ")), "")
         raise RuleError(f"does not compile as rule(f, w_norm, soc, theta, rng) -> (bool, float) with floats "
-                        f"and a numpy Generator: {first}") from None
+                        f"and a numpy Generator: {cause}{where}") from None
     # An earlier call with the same arguments may have compiled it to return something else.
     returns = kernel.overloads[RULE_ARGS].signature.return_type
     if returns != RULE_SIGNATURE.return_type:

@@ -16,18 +16,33 @@ from typing import Any
 import numpy as np
 import pyarrow.parquet as pq
 
-from .config import SECONDS_PER_WEEK
+from ..config import ConfigError
+from .config import SECONDS_PER_WEEK, Config
 
-__all__ = ["replay_data", "GOLDEN_ANGLE"]
+__all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS"]
 
 #: Bearing step between consecutive order ids [rad]: successive orders never line up.
 GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
 OUTCOMES = ("delivered", "aborted", "lost", "in_flight")
+#: At most this many attempts in a page (~90 bytes each: a page of ~90 MB, built in a few GB
+#: of memory); the paper's 8-week run has ~6,000, the largest run allowed ~10^7.
+MAX_FLIGHTS = 1_000_000
 
 
 def _rounded(values, decimals):
     """A float column as a JSON-ready list, to ``decimals`` places (the page draws pixels)."""
     return np.round(np.asarray(values, dtype=np.float64), decimals).tolist()
+
+
+def check_replayable(config: Config) -> None:
+    """Refuse (ConfigError, one line) before ``dronefleet run --replay`` simulates a run whose
+    expected orders alone exceed :data:`MAX_FLIGHTS`: its page would be refused after the run."""
+    from .config import run_size
+
+    orders = run_size(config)["orders"]
+    if orders > MAX_FLIGHTS:
+        raise ConfigError(f"--replay: the run would hold ~{orders:.2g} orders and a replay page draws at most "
+                          f"{MAX_FLIGHTS:,} attempts: run it without --replay, or a shorter run (horizon_weeks)")
 
 
 def replay_data(run_dir: Path) -> dict[str, Any]:
@@ -48,6 +63,10 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
     from .scenario import describe
 
     config = read_config(run_dir / "summary.parquet")
+    flights = pq.ParquetFile(run_dir / "attempts.parquet").metadata.num_rows
+    if flights > MAX_FLIGHTS:  # before the tables are read: the page would not fit in memory, nor play
+        raise ConfigError(f"RUN_DIR {str(run_dir)!r} has {flights:,} attempts; a replay page draws at most "
+                          f"{MAX_FLIGHTS:,}: replay a shorter run (horizon_weeks) or one of fewer orders")
     horizon, speed = config.horizon_s, config.speed_m_s
     orders = pq.read_table(run_dir / "orders.parquet", columns=["order_id", "arrival_s", "distance_m"]).to_pandas()
     attempts = pq.read_table(run_dir / "attempts.parquet", columns=[

@@ -6,6 +6,7 @@ outcome does not depend on the trials beside it, so this is exactly the trial of
 every robot's centre, battery and controller phase at each sample of the time series.
 """
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Any
@@ -20,7 +21,8 @@ __all__ = ["replay_data", "AREAS", "MAX_FRAMES"]
 #: them: ``[x_min, x_max, y_min, y_max]`` [m]; the transfer area only with mobile chargers.
 AREAS = {"base": [-0.825, -0.5, -0.825, 0.825], "transfer": [0.2, 0.5, -0.825, 0.825],
          "work": [0.5, 0.825, -0.825, 0.825]}
-#: At most this many frames in the page: a longer run keeps every k-th sample.
+#: At most this many frames in the page: a longer run keeps every k-th sample (and only
+#: those are simulated: the track of every sample of a long run would not fit in memory).
 MAX_FRAMES = 20_000
 
 
@@ -39,10 +41,11 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
 
     config = read_config(run_dir / "summary.parquet")
     p = config.params
-    r = simulate(p, trials=1, first_trial=config.first_trial, track=True)
+    stride = math.ceil((p.ticks // p.sample_every + 1) / MAX_FRAMES)
+    # sampling only reads the state: every stride-th sample of the run, and no other
+    r = simulate(dataclasses.replace(p, sample_every=p.sample_every * stride), trials=1,
+                 first_trial=config.first_trial, track=True)
     track = r["track"]
-    stride = math.ceil(track["x"].shape[0] / MAX_FRAMES)
-    frames = slice(None, None, stride)
     areas = AREAS if p.mobile else {name: area for name, area in AREAS.items() if name != "transfer"}
     return {
         "scenario": "replenishment",
@@ -56,10 +59,10 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
         "radius_m": RADIUS,
         "areas": areas,
         "phases": {"workers": list(_PHASES["workers"]), "chargers": list(_PHASES["chargers"])},
-        "x": np.round(track["x"][frames], 4).reshape(-1).tolist(),
-        "y": np.round(track["y"][frames], 4).reshape(-1).tolist(),
-        "energy": np.round(track["energy"][frames], 2).reshape(-1).tolist(),
-        "phase": track["phase"][frames].reshape(-1).tolist(),
-        "work": r["series"][0, frames, TS_WORK].astype(np.int64).tolist(),
-        "stored": np.round(r["series"][0, frames, TS_STORED], 1).tolist(),
+        "x": np.round(track["x"], 4).reshape(-1).tolist(),
+        "y": np.round(track["y"], 4).reshape(-1).tolist(),
+        "energy": np.round(track["energy"], 2).reshape(-1).tolist(),
+        "phase": track["phase"].reshape(-1).tolist(),
+        "work": r["series"][0, :, TS_WORK].astype(np.int64).tolist(),
+        "stored": np.round(r["series"][0, :, TS_STORED], 1).tolist(),
     }

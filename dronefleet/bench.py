@@ -25,7 +25,7 @@ def bench_reproduce(argv):
     jobs = parser.parse_args(argv).jobs or available_cpus()
     with tempfile.TemporaryDirectory(prefix="dronefleet-bench-") as results:
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "dronefleet.cli", "reproduce", "all", "--results", results,
+        subprocess.run([sys.executable, "-m", "dronefleet.cli", "reproduce", "all", "--out", results,
                         "--jobs", str(jobs)], check=True, stdout=subprocess.DEVNULL)
         wall = time.perf_counter() - start
     peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # KiB on Linux

@@ -122,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
 
     log.info(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
              f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
-             "(the first run on a machine compiles the engine, ~30 s)")
+             "(the first run on a machine compiles the engine, ~40 s)")
     log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
     weeks = console.progress(config.horizon_weeks, "week", "  simulated")

@@ -17,7 +17,7 @@ from conftest import ALWAYS, NEVER, run_state, scenario, scenario_config
 
 import dronefleet
 from dronefleet import cli
-from dronefleet.delivery import simulation
+from dronefleet.delivery import auction, simulation
 from dronefleet.delivery.auction import PLUGIN, RuleError, resolve_rule
 
 REPO = Path(dronefleet.__file__).resolve().parent.parent
@@ -168,6 +168,7 @@ def test_an_entry_point_named_like_a_built_in_rule_is_not_used_and_said_so(tmp_p
     (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: shadow\nVersion: 0.1\n")
     (dist / "entry_points.txt").write_text("[dronefleet.winner_rules]\nthreshold = shadow:lowest_soc\n")
     monkeypatch.syspath_prepend(str(tmp_path))
+    auction._warn_if_shadowed.cache_clear()  # it warns once per name and process: earlier tests resolved it
     assert resolve_rule("threshold").code != PLUGIN
     assert "entry point 'threshold' (shadow:lowest_soc) is not used: 'threshold' is the built-in rule" in caplog.text
 

@@ -411,14 +411,22 @@ def _alive(pid):
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads processes from /proc (Linux)")
 def test_a_killed_sweep_leaves_no_worker_and_no_resource_tracker(tmp_path):
-    path = tmp_path / "long.toml"  # 200 runs of 8 weeks on 2 workers: still running when killed
-    path.write_text('[sweep]\nname = "long"\nseeds = { start = 0, count = 200 }\n[grid]\nrule = ["least_confident"]\n')
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    path = tmp_path / "long.toml"
+    path.write_text('[sweep]\nname = "long"\nseeds = { start = 0, count = 5 }\n[set]\nhorizon_weeks = 0.1\n'
+                    '[grid]\nrule = ["least_confident"]\n')
+    # The workers' runs never end (the first run, in the sweep's own process, is real): the sweep
+    # is still running when killed, whatever the machine's speed. Workers import it by name.
+    (tmp_path / "endless.py").write_text(
+        "import multiprocessing, time\nfrom dronefleet import sweeps\nreal = sweeps.execute\n"
+        "def execute(run, out):\n    if multiprocessing.parent_process() is not None:\n"
+        "        time.sleep(3600)\n    return real(run, out)\n")
+    code = ("import sys, endless\nfrom dronefleet import cli, sweeps\nsweeps.execute = endless.execute\n"
+            f"sys.exit(cli.main(['sweep', 'run', {str(path)!r}, '--results', {str(tmp_path)!r}, '--jobs', '2']))\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT), os.environ.get("PYTHONPATH", "")])}
     for name, _ in sw.TASK_VARIABLES:
         env.pop(name, None)
-    sweep = subprocess.Popen([sys.executable, "-m", "dronefleet.cli", "sweep", "run", str(path),
-                              "--results", str(tmp_path), "--jobs", "2"],
-                             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    sweep = subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
     started = []
     try:
         deadline = time.monotonic() + 300  # the first run compiles the engine if no cache has it

@@ -431,15 +431,21 @@ def test_a_killed_sweep_started_again_redoes_only_unfinished_runs(tmp_path, caps
     path = write(tmp_path, RESUME, name="resume.toml")
     s = sw.load_sweep(path)
     killed, clean = tmp_path / "killed", tmp_path / "clean"
-    command = [sys.executable, "-m", "dronefleet.cli", "sweep", "run", str(path), "--results", str(killed),
-               "--jobs", "1"]
-    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    summaries = [run.path(killed / "resume", "summary") for run in s.runs]
-    deadline = time.monotonic() + 120
-    while not any(p.exists() for p in summaries) and time.monotonic() < deadline:
-        time.sleep(0.002)
-    process.send_signal(signal.SIGKILL)
-    process.wait()
+    # The sweep process SIGKILLs itself as it starts its fourth run (one process, runs in order):
+    # a kill half-way, whatever the machine's speed.
+    kill_at = s.runs[3].id
+    code = ("import os, signal, sys\n"
+            "from dronefleet import cli, sweeps\n"
+            "real = sweeps.execute\n"
+            "def execute(run, out):\n"
+            f"    if run.id == {kill_at!r}:\n"
+            "        os.kill(os.getpid(), signal.SIGKILL)\n"
+            "    return real(run, out)\n"
+            "sweeps.execute = execute\n"
+            f"sys.exit(cli.main(['sweep', 'run', {str(path)!r}, '--results', {str(killed)!r}, '--jobs', '1']))\n")
+    process = subprocess.run([sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                             timeout=600)
+    assert process.returncode == -signal.SIGKILL
     done = [run for run in s.runs if sw.state(run, killed / "resume") == "done"]
     assert 1 <= len(done) < len(s.runs), "the sweep was not stopped half-way"
     before = {p: (p.stat().st_ino, p.stat().st_mtime_ns)

@@ -530,26 +530,25 @@ def _earliest_bid(book, fleet, counters, params, t):
             earliest = min(earliest, fleet.t_ref[i]
                            + log((100.0 - fleet.soc_ref[i]) / theta_gap) / params.charge_rate)
             continue
-        else:
-            if fleet.reach_stale[i]:
-                best = -np.inf
-                order = queued_at(book.queue_tree, OLDEST) if counters[QUEUE_LEN] > 0 else -1
-                while order >= 0:
-                    best = max(best, _order_value(fleet.coef, i, book.x_distance[order], book.x_mass[order]))
-                    order = book.queue_next[order]
-                fleet.reach[i] = best
-                fleet.reach_stale[i] = False
-            slack = fleet.reach[i] + fleet.intercept[i]
-            w_soc = fleet.coef[i, 2] / params.soc_std
-            margin = F_MARGIN * (1.0 + abs(fleet.reach[i]) + abs(fleet.intercept[i]))
-            if w_soc <= 0.0:
-                # Charging cannot make this UAV keener.
-                if slack + w_soc * (soc - params.soc_mean) >= -margin:
-                    return t
-                continue
-            need = params.soc_mean + (-slack - margin) / w_soc
-            if params.reserves and need <= 100.0:  # it can reserve now, whatever its SoC
+        if fleet.reach_stale[i]:
+            best = -np.inf
+            order = queued_at(book.queue_tree, OLDEST) if counters[QUEUE_LEN] > 0 else -1
+            while order >= 0:
+                best = max(best, _order_value(fleet.coef, i, book.x_distance[order], book.x_mass[order]))
+                order = book.queue_next[order]
+            fleet.reach[i] = best
+            fleet.reach_stale[i] = False
+        slack = fleet.reach[i] + fleet.intercept[i]
+        w_soc = fleet.coef[i, 2] / params.soc_std
+        margin = F_MARGIN * (1.0 + abs(fleet.reach[i]) + abs(fleet.intercept[i]))
+        if w_soc <= 0.0:
+            # Charging cannot make this UAV keener.
+            if slack + w_soc * (soc - params.soc_mean) >= -margin:
                 return t
+            continue
+        need = params.soc_mean + (-slack - margin) / w_soc
+        if params.reserves and need <= 100.0:  # it can reserve now, whatever its SoC
+            return t
         if soc >= need:
             return t
         gap = 100.0 - need + SOC_MARGIN

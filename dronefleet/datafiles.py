@@ -1,0 +1,151 @@
+"""Files read as data: every file the tool reads back (tables, side files of a sweep, a run's
+metadata) goes through here, so that a damaged or tampered file is refused in one line and
+never hangs, exhausts memory or runs code.
+
+* :func:`read_bytes`: a regular file (not a pipe, device or folder) of at most ``limit`` bytes;
+* :func:`parse_json`, :func:`read_json`: JSON nested at most :data:`MAX_JSON_DEPTH` deep;
+* :func:`parquet_schema`, :func:`read_parquet`: a parquet file whose footer can be read and whose
+  columns have the names and types expected, read whole (so a truncated or garbled file is found
+  before any of it is used).
+
+Every refusal is a :class:`DataError` (a :class:`~dronefleet.config.ConfigError`: one line,
+exit code 2) naming the file. What a value must be beyond its type (a range, a code) is the
+reader's to check: the scenario knows it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import stat
+from collections.abc import Mapping
+from typing import Any
+
+from .config import ConfigError
+
+__all__ = ["DataError", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_TABLE_BYTES", "parse_json", "parquet_schema",
+           "read_bytes", "read_json", "read_parquet"]
+
+#: Largest JSON side file read [bytes] (a sweep's layout, a failed run's record: a few KB).
+MAX_JSON_BYTES = 1_000_000
+#: Deepest nesting of lists and objects accepted in JSON (configs nest 2-3 levels).
+MAX_JSON_DEPTH = 32
+#: Largest parquet file read [bytes]; the largest run allowed writes a few GB.
+MAX_TABLE_BYTES = 16_000_000_000
+
+
+class DataError(ConfigError):
+    """A file read back as data that is not what it should be: damaged, tampered with, of another
+    kind, or not a regular file. The message names the file and what is wrong, in one line."""
+
+
+def _regular(path: str | os.PathLike, kind: str, limit: int) -> int:
+    """The size of ``path`` [bytes] after checking it is a regular file of at most ``limit`` bytes."""
+    try:
+        info = os.stat(path)
+    except (OSError, ValueError) as e:  # ValueError: a NUL byte in the path
+        raise DataError(f"cannot read {kind} {str(path)!r}: {getattr(e, 'strerror', None) or e}") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise DataError(f"{kind} {str(path)!r} is not a regular file (a folder, pipe or device)")
+    if info.st_size > limit:
+        raise DataError(f"{kind} {str(path)!r} has {info.st_size} bytes; at most {limit} are read")
+    return info.st_size
+
+
+def read_bytes(path: str | os.PathLike, limit: int, kind: str = "file") -> bytes:
+    """The bytes of the regular file ``path``, of at most ``limit`` bytes; DataError naming ``kind``
+    and the path otherwise (a pipe would block, ``/dev/zero`` would never end)."""
+    _regular(path, kind, limit)
+    try:
+        # O_NONBLOCK: a file swapped for a pipe after the check does not block the open
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        with os.fdopen(fd, "rb") as fh:
+            data = fh.read(limit + 1)  # no further: the file may have grown since
+    except OSError as e:
+        raise DataError(f"cannot read {kind} {str(path)!r}: {e.strerror or e}") from None
+    if data is None or len(data) > limit:
+        raise DataError(f"{kind} {str(path)!r} is larger than {limit} bytes or not a regular file")
+    return data
+
+
+def _first_line(error: BaseException) -> str:
+    """The first line of an error's message, cut to 200 characters (or its type's name)."""
+    text = str(error).strip()
+    return text.splitlines()[0][:200] if text else type(error).__name__
+
+
+def _depth(value: Any) -> int:
+    """How deeply lists and dicts nest in ``value`` (0 for a scalar), without recursion."""
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        item, level = stack.pop()
+        if isinstance(item, dict):
+            item = list(item.values())
+        if isinstance(item, list):
+            level += 1
+            deepest = max(deepest, level)
+            stack.extend((child, level) for child in item)
+    return deepest
+
+
+def parse_json(text: str | bytes, where: str, max_depth: int = MAX_JSON_DEPTH) -> Any:
+    """``text`` parsed as JSON; DataError naming ``where`` if it is not JSON or nests deeper than
+    ``max_depth``. Only plain values come out: JSON has no way to name code."""
+    try:
+        value = json.loads(text)
+    except RecursionError:
+        raise DataError(f"{where} nests lists or objects more than {max_depth} deep") from None
+    except ValueError as e:  # JSONDecodeError, UnicodeDecodeError, an integer of too many digits
+        raise DataError(f"{where} is not valid JSON: {_first_line(e)}") from None
+    if _depth(value) > max_depth:
+        raise DataError(f"{where} nests lists or objects more than {max_depth} deep")
+    return value
+
+
+def read_json(path: str | os.PathLike, kind: str = "file", limit: int = MAX_JSON_BYTES,
+              max_depth: int = MAX_JSON_DEPTH) -> Any:
+    """The JSON document in the regular file ``path`` (at most ``limit`` bytes, nested at most
+    ``max_depth`` deep); DataError naming ``kind`` and the path otherwise."""
+    return parse_json(read_bytes(path, limit, kind), f"{kind} {str(path)!r}", max_depth)
+
+
+def parquet_schema(path: str | os.PathLike, kind: str = "table", limit: int = MAX_TABLE_BYTES):
+    """The Arrow schema (with its metadata) of the parquet file ``path``, read from its footer
+    alone; DataError if the file is not a regular file of at most ``limit`` bytes or not parquet."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    _regular(path, kind, limit)
+    try:
+        return pq.read_schema(path)
+    except (pa.ArrowException, OSError, ValueError) as e:
+        raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({_first_line(e)})") from None
+
+
+def read_parquet(path: str | os.PathLike, columns: Mapping[str, Any], kind: str = "table",
+                 limit: int = MAX_TABLE_BYTES):
+    """The columns ``columns`` (name -> pyarrow DataType, or a predicate such as
+    ``pyarrow.types.is_integer``) of the parquet file ``path``, read whole.
+
+    DataError, naming the file and the first column at fault, if the file is not a readable
+    parquet file (truncated, garbled), lacks a column or holds one of another type, or is not a
+    regular file of at most ``limit`` bytes. Nulls are the reader's to check.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    schema = parquet_schema(path, kind, limit)
+    for name, expected in columns.items():
+        index = schema.get_field_index(name)
+        if index < 0:
+            raise DataError(f"{kind} {str(path)!r} has no column {name!r} (it has "
+                            f"{', '.join(schema.names[:12]) or 'none'}); it was not written by this dronefleet")
+        actual = schema.field(index).type
+        ok = actual == expected if isinstance(expected, pa.DataType) else expected(actual)
+        if not ok:
+            raise DataError(f"{kind} {str(path)!r}: column {name!r} is {actual}, "
+                            f"not {expected if isinstance(expected, pa.DataType) else expected.__name__}")
+    try:
+        return pq.read_table(path, columns=list(columns))
+    except (pa.ArrowException, OSError, ValueError) as e:
+        raise DataError(f"{kind} {str(path)!r} is damaged ({_first_line(e)})") from None

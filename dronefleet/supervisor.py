@@ -184,6 +184,8 @@ def _read_yaml(path):
     writes them, and a few nested ones expand to billions of nodes, the "billion laughs"),
     and so is nesting deeper than MAX_DEPTH (the compiled YAML composer recurses in C).
     """
+    if os.path.exists(path) and not (os.path.isfile(path) or os.path.isdir(path)):  # a pipe would block the read
+        raise _error(path, "cannot read the supervisor file: not a regular file (a pipe or device)")
     try:
         with open(path, "rb") as fh:
             data = fh.read(MAX_FILE_BYTES + 1)  # read no further: the path may be a device or a pipe

@@ -26,7 +26,7 @@ from dronefleet.delivery import simulation
 from dronefleet.delivery.config import RUN_LIMITS, default_config, load_config, replace, run_size
 from dronefleet.delivery.fleet import COLUMNS, load_fleet
 from dronefleet.records import write_table
-from dronefleet.supervisor import (BUILTIN_CONTROLLER, MAX_FILE_BYTES, SupervisorFileError,
+from dronefleet.supervisor import (BUILTIN_CONTROLLER, MAX_DEPTH, MAX_FILE_BYTES, SupervisorFileError,
                                    load_supervisor)
 
 N_UAVS = 3
@@ -320,7 +320,10 @@ HOSTILE_SUPERVISORS = [
     ("empty", b"", "is empty"),
     ("blank", b"  \n\n", "is empty"),
     ("larger than the cap", b"# x\n" * (MAX_FILE_BYTES // 4 + 1), f"is larger than {MAX_FILE_BYTES} bytes"),
-    ("deep nesting", b"[" * 100_000 + b"]" * 100_000, "nests lists or mappings more than"),
+    # Nesting past our cap but within libyaml's own (1,000 flow levels in PyYAML >= 6.0.4): our words.
+    ("deep nesting", b"[" * (MAX_DEPTH + 1) + b"]" * (MAX_DEPTH + 1), f"nests lists or mappings more than {MAX_DEPTH}"),
+    # Nesting that libyaml itself may refuse first: refused in one line, in whoever's words.
+    ("very deep nesting", b"[" * 100_000 + b"]" * 100_000, ""),
     ("integer of 5000 digits", b"num_events: " + b"9" * 5000, "not valid YAML"),
     ("not YAML", b"a: [1, 2\nb: }", "not valid YAML"),
     ("a list", b"[1, 2, 3]", "should be a mapping"),
@@ -344,7 +347,12 @@ def test_hostile_supervisor_file_is_refused_in_one_line(name, data, fragment, tm
     assert message.startswith(str(path))
 
 
-@pytest.mark.parametrize("make", [lambda p: p, lambda p: p / "missing.yaml"], ids=["directory", "missing"])
+def _fifo(folder):
+    os.mkfifo(folder / "pipe.yaml")
+    return folder / "pipe.yaml"
+
+
+@pytest.mark.parametrize("make", [lambda p: p, lambda p: p / "missing.yaml", _fifo], ids=["directory", "missing", "fifo"])
 def test_supervisor_path_that_is_no_file_is_refused(make, tmp_path):
     with pytest.raises(SupervisorFileError, match="cannot read the supervisor file"):
         load_supervisor(make(tmp_path))

@@ -82,6 +82,11 @@ and carries the run's config, and the scenario does not find it outdated (delive
 ``fleet_file`` written again since; see :func:`state`): a sweep started again skips done runs
 and redoes the others, replacing what an interrupted attempt wrote. (A kill in the middle of
 a write can leave a hidden ``.part-0.parquet.<pid>.tmp``, which readers ignore.)
+A run with a file that cannot be used (truncated, garbled, other columns, no config: see
+:func:`damage`) is damaged: not done, named in one line wherever it is met, redone by a
+sweep run. Side files (``_layout.json``, ``_failed/`` records) are read as data
+(:func:`dronefleet.datafiles.read_json`: a regular file of at most 1 MB, nested at most 32
+deep) and their keys checked before use.
 """
 
 from __future__ import annotations

@@ -140,7 +140,7 @@ def damaged_bytes(original, damage, config):
     return sink.getvalue().to_pybytes()
 
 
-@settings(SETTINGS, max_examples=40)   # each example reads the dataset three ways
+@settings(SETTINGS, max_examples=25)   # each example reads the dataset three ways
 @given(st.integers(0, 3), st.sampled_from(TABLES), damages)
 def test_any_damage_to_a_part_gives_a_state_and_readers_a_result_or_a_data_error(dataset, index, table, damage):
     s, out = dataset

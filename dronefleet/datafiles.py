@@ -6,7 +6,8 @@ never hangs, exhausts memory or runs code.
 * :func:`parse_json`, :func:`read_json`: JSON nested at most :data:`MAX_JSON_DEPTH` deep;
 * :func:`parquet_schema`, :func:`read_parquet`: a parquet file whose footer can be read and whose
   columns have the names and types expected, read whole (so a truncated or garbled file is found
-  before any of it is used).
+  before any of it is used); :func:`check_columns`, the columns of a schema read from a footer
+  alone (where reading every file whole would cost too much).
 
 Every refusal is a :class:`DataError` (a :class:`~dronefleet.config.ConfigError`: one line,
 exit code 2) naming the file. What a value must be beyond its type (a range, a code) is the
@@ -23,8 +24,8 @@ from typing import Any
 
 from .config import ConfigError
 
-__all__ = ["DataError", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_TABLE_BYTES", "parse_json", "parquet_schema",
-           "read_bytes", "read_json", "read_parquet"]
+__all__ = ["DataError", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_TABLE_BYTES", "check_columns", "parse_json",
+           "parquet_schema", "read_bytes", "read_json", "read_parquet"]
 
 #: Largest JSON side file read [bytes] (a sweep's layout, a failed run's record: a few KB).
 MAX_JSON_BYTES = 1_000_000
@@ -122,19 +123,14 @@ def parquet_schema(path: str | os.PathLike, kind: str = "table", limit: int = MA
         raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({_first_line(e)})") from None
 
 
-def read_parquet(path: str | os.PathLike, columns: Mapping[str, Any], kind: str = "table",
-                 limit: int = MAX_TABLE_BYTES):
-    """The columns ``columns`` (name -> pyarrow DataType, or a predicate such as
-    ``pyarrow.types.is_integer``) of the parquet file ``path``, read whole.
-
-    DataError, naming the file and the first column at fault, if the file is not a readable
-    parquet file (truncated, garbled), lacks a column or holds one of another type, or is not a
-    regular file of at most ``limit`` bytes. Nulls are the reader's to check.
-    """
+def check_columns(schema, columns: Mapping[str, Any], path: str | os.PathLike, kind: str = "table",
+                  exact: bool = False) -> None:
+    """Refuse (DataError naming the file and the first column at fault) a parquet ``schema`` (of
+    the file ``path``) that lacks one of ``columns`` (name -> pyarrow DataType, or a predicate
+    such as ``pyarrow.types.is_integer``) or holds one of another type; with ``exact``, also
+    one holding a column not in ``columns``."""
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
-    schema = parquet_schema(path, kind, limit)
     for name, expected in columns.items():
         index = schema.get_field_index(name)
         if index < 0:
@@ -145,6 +141,28 @@ def read_parquet(path: str | os.PathLike, columns: Mapping[str, Any], kind: str 
         if not ok:
             raise DataError(f"{kind} {str(path)!r}: column {name!r} is {actual}, "
                             f"not {expected if isinstance(expected, pa.DataType) else expected.__name__}")
+    extra = [name for name in schema.names if name not in columns] if exact else []
+    if extra or len(schema.names) != len(set(schema.names)):
+        shown = extra[0] if extra else next(n for n in schema.names if schema.names.count(n) > 1)
+        raise DataError(f"{kind} {str(path)!r} has a column {shown!r} beyond (or repeating) its {len(columns)} "
+                        f"columns ({', '.join(list(columns)[:12])}); it was not written by this dronefleet")
+
+
+def read_parquet(path: str | os.PathLike, columns: Mapping[str, Any], kind: str = "table",
+                 limit: int = MAX_TABLE_BYTES, exact: bool = False):
+    """The columns ``columns`` (name -> pyarrow DataType, or a predicate such as
+    ``pyarrow.types.is_integer``) of the parquet file ``path``, read whole, with the file's
+    schema metadata.
+
+    DataError, naming the file and the first column at fault, if the file is not a readable
+    parquet file (truncated, garbled), lacks a column or holds one of another type (with
+    ``exact``, or one more: see :func:`check_columns`), or is not a regular file of at most
+    ``limit`` bytes. Nulls are the reader's to check.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    check_columns(parquet_schema(path, kind, limit), columns, path, kind, exact)
     try:
         return pq.read_table(path, columns=list(columns))
     except (pa.ArrowException, OSError, ValueError) as e:

@@ -59,7 +59,7 @@ from .outputs import probe_folders
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
-from .sweeps import Progress, Run, Sweep, SweepError, available_cpus, dataset, load_sweep, run_sweep
+from .sweeps import Progress, Run, Sweep, SweepError, available_cpus, dataset, load_sweep, rows, run_sweep
 
 log = logging.getLogger("dronefleet.reproduce")  # not __name__: it also runs as __main__
 
@@ -176,7 +176,7 @@ class Study:
         for key, value in where.items():
             term = pc.field(key) == value
             condition = term if condition is None else condition & term
-        return data.to_table(filter=condition).to_pandas()
+        return rows(self.sweep(name), self.out(name), table, data, condition).to_pandas()
 
     def horizon_s(self, name: str) -> float:
         return self.sweep(name).runs[0].config.horizon_s

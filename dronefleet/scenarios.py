@@ -37,6 +37,9 @@ The contract: a scenario is a module defining
     the run's tables, named as in ``TABLES`` (which holds ``"summary"``); written by
     :func:`dronefleet.records.write_tables`, atomically, a run folder complete or absent,
     each file with the config and :func:`dronefleet.provenance.stamp` in its metadata.
+``table_schemas() -> dict[str, pyarrow.Schema]``
+    the columns and types of each table ``simulate`` makes: a sweep refuses, as damaged, a
+    file it reads back that holds other ones.
 ``format_summary(tables) -> str``
     what ``dronefleet run`` prints, from the tables alone.
 ``describe(config)``, ``label(config)``
@@ -155,6 +158,9 @@ class Scenario:
 
     def read_config(self, path: str | os.PathLike) -> Any:
         return self.module.read_config(path)
+
+    def table_schemas(self) -> dict[str, pyarrow.Schema]:
+        return self.module.table_schemas()
 
     def simulate(self, config: Any) -> dict[str, pyarrow.Table]:
         return self.module.simulate(config)

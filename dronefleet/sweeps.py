@@ -82,6 +82,11 @@ and carries the run's config, and the scenario does not find it outdated (delive
 ``fleet_file`` written again since; see :func:`state`): a sweep started again skips done runs
 and redoes the others, replacing what an interrupted attempt wrote. (A kill in the middle of
 a write can leave a hidden ``.part-0.parquet.<pid>.tmp``, which readers ignore.)
+A run with a file that cannot be used (truncated, garbled, other columns, no config: see
+:func:`damage`) is damaged: not done, named in one line wherever it is met, redone by a
+sweep run. Side files (``_layout.json``, ``_failed/`` records) are read as data
+(:func:`dronefleet.datafiles.read_json`: a regular file of at most 1 MB, nested at most 32
+deep) and their keys checked before use.
 """
 
 from __future__ import annotations
@@ -105,6 +110,7 @@ from urllib.parse import quote
 
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, read_toml
+from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, probe_folders
 from .scenarios import Scenario
 
@@ -112,6 +118,7 @@ if TYPE_CHECKING:
     import argparse
 
     import pyarrow
+    import pyarrow.compute
     import pyarrow.dataset
 
 log = logging.getLogger(__name__)
@@ -510,26 +517,85 @@ def _config_difference(scenario: Scenario, a, b) -> str:
     return ", ".join(f"{key} {x!r} vs {y!r}" for key, x, y in values if x != y)
 
 
-def state(run: Run, out: Path) -> str:
-    """``done``, ``failed`` or ``missing``: where ``run`` stands in the dataset ``out``.
+def _part_columns(run: Run, table: str, schemas: Mapping[str, pyarrow.Schema]) -> dict[str, pyarrow.DataType]:
+    """The columns (name -> type) of ``run``'s file of ``table``: the scenario's, less the
+    partition keys (they come back from the path)."""
+    return {field.name: field.type for field in schemas[table] if field.name not in run.keys}
 
-    A run whose summary exists is not done if its scenario finds it outdated (delivery: it
-    starts from a saved fleet written again after the run, see
-    :func:`dronefleet.delivery.scenario.outdated`): a rerun replaces its results.
+
+def damage(run: Run, out: Path) -> str | None:
+    """Why the files of ``run`` (whose summary is there) cannot be used, in one line naming the
+    file; None if they can.
+
+    Each table's file must be a regular parquet file of at most
+    :data:`~dronefleet.datafiles.MAX_TABLE_BYTES` bytes whose footer reads, holding exactly the
+    scenario's columns and types (:meth:`~dronefleet.scenarios.Scenario.table_schemas`, less the
+    partition keys) and the run's config in its metadata. The summary (one row per run, or per
+    trial) is read whole, so damage inside it is found too; the other tables are checked from
+    their footers alone (a truncated file has none): damage inside one of their pages is found
+    when they are read (:func:`rows`).
+
+    Raises SweepError if the summary was made with another config (the sweep file changed
+    since): new results would silently mix with old ones.
+    """
+    from .records import CONFIG_KEY
+
+    schemas = run.scenario.table_schemas()
+    expected = json.loads(run.config.to_json())
+    for table in sorted(run.scenario.tables, key=lambda name: name != "summary"):  # the summary first
+        path = run.path(out, table)
+        columns = _part_columns(run, table, schemas)
+        try:
+            if table == "summary":
+                schema = read_parquet(path, columns, "part", exact=True).schema
+            else:
+                schema = parquet_schema(path, "part")
+                check_columns(schema, columns, path, "part", exact=True)
+            text = (schema.metadata or {}).get(CONFIG_KEY)
+            if text is None:
+                raise DataError(f"part {str(path)!r} has no config in its metadata")
+            if parse_json(text, f"the config in part {str(path)!r}") == expected:
+                continue
+            found = run.scenario.read_config(path)  # the same config, maybe spelled by another version
+        except DataError as error:
+            return str(error)
+        except ConfigError as error:
+            return f"the config in part {str(path)!r} is not a {run.scenario.name} config ({error})"
+        if found == run.config:
+            continue
+        difference = _config_difference(run.scenario, found, run.config)
+        if table == "summary":
+            raise SweepError(f"{path} was made with another config ({difference}); "
+                             f"write to another --results root, or remove {out} to start again")
+        return f"part {str(path)!r} was made with another config than its run's summary ({difference})"
+    return None
+
+
+def inspect(run: Run, out: Path) -> tuple[str, str | None]:
+    """``(state, why)``: :func:`state`, with :func:`damage`'s line for a damaged run (else None)."""
+    summary = run.path(out, "summary")
+    if os.path.lexists(summary):
+        problem = damage(run, out)
+        if problem is not None:
+            return "damaged", problem
+        if not run.scenario.outdated(run.config, summary):
+            return "done", None
+    return "failed" if os.path.lexists(run.failure_path(out)) else "missing", None
+
+
+def state(run: Run, out: Path) -> str:
+    """``done``, ``damaged``, ``failed`` or ``missing``: where ``run`` stands in the dataset ``out``.
+
+    A run whose summary is there is ``damaged`` if one of its files cannot be used (see
+    :func:`damage`: truncated, garbled, other columns, no config): it is not done, and a
+    rerun replaces its files (each atomically). It is not done either if its scenario finds
+    it outdated (delivery: it starts from a saved fleet written again after the run, see
+    :func:`dronefleet.delivery.scenario.outdated`).
 
     Raises SweepError if the run's summary was made with another config (the sweep file
     changed since): new results would silently mix with old ones.
     """
-    summary = run.path(out, "summary")
-    if summary.exists():
-        found = run.scenario.read_config(summary)
-        if found != run.config:
-            difference = _config_difference(run.scenario, found, run.config)
-            raise SweepError(f"{summary} was made with another config ({difference}); "
-                             f"write to another --results root, or remove {out} to start again")
-        if not run.scenario.outdated(run.config, summary):
-            return "done"
-    return "failed" if run.failure_path(out).exists() else "missing"
+    return inspect(run, out)[0]
 
 
 # --------------------------------------------------------------------------- one partition layout per dataset
@@ -543,12 +609,9 @@ def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[str, ...] | None:
     written before that file existed, from the partition directories of its ``tables``; None if
     it holds none."""
     record = out / LAYOUT_FILE
+    if os.path.lexists(record):
+        return _layout_keys(record, out)
     try:
-        if record.exists():
-            keys = json.loads(record.read_text(encoding="utf-8"))["keys"]
-            if not (isinstance(keys, list) and keys and all(isinstance(key, str) for key in keys)):
-                raise ValueError("keys is not a list of names")
-            return tuple(keys)
         for table in tables:
             keys, folder = [], out / table
             while folder.is_dir():  # down the first partition directory of each level
@@ -559,10 +622,26 @@ def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[str, ...] | None:
                 keys.append(folder.name.split("=", 1)[0])
             if keys:
                 return tuple(keys)
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise SweepError(f"cannot read the partition layout of the dataset {out} ({type(error).__name__}: {error}); "
-                         f"its {LAYOUT_FILE} holds {{\"keys\": [...]}}: fix or remove it") from None
+    except OSError as error:
+        raise SweepError(f"cannot read the partition layout of the dataset {out} ({error.strerror or error})") from None
     return None
+
+
+def _layout_keys(record: Path, out: Path) -> tuple[str, ...]:
+    """The partition keys the layout file ``record`` holds: ``{"keys": [names]}``, read as data
+    (a regular file of at most :data:`~dronefleet.datafiles.MAX_JSON_BYTES` bytes, nested at
+    most :data:`~dronefleet.datafiles.MAX_JSON_DEPTH` deep); SweepError naming it otherwise."""
+    fix = f'its {LAYOUT_FILE} holds {{"keys": [...]}}: fix or remove it'
+    try:
+        document = read_json(record, LAYOUT_FILE)
+    except DataError as error:
+        raise SweepError(f"cannot read the partition layout of the dataset {out}: {error}; {fix}") from None
+    keys = document.get("keys") if isinstance(document, dict) else None
+    if not (isinstance(keys, list) and keys and set(document) == {"keys"}
+            and all(isinstance(key, str) and key.isidentifier() for key in keys)):
+        raise SweepError(f"cannot read the partition layout of the dataset {out}: {str(record)!r} is not "
+                         f"{{\"keys\": [names of config keys]}}; {fix}")
+    return tuple(keys)
 
 
 def check_layout(sweep: Sweep, out: Path) -> None:
@@ -714,7 +793,13 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
     from . import executors
 
     check_layout(sweep, out)
-    todo = [run for run in runs if state(run, out) != "done"]
+    todo = []
+    for run in runs:
+        found, problem = inspect(run, out)
+        if found == "damaged":
+            _report(f"{problem}: running {run.partition} again")
+        if found != "done":
+            todo.append(run)
     out = out.absolute()  # workers may have another working directory
     function = partial(execute, out=out)
     if scheduler is None:
@@ -783,8 +868,15 @@ def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, parti
 
 
 def _done_runs(sweep: Sweep, out: Path) -> list[Run]:
-    """The runs of ``sweep`` that are done in ``out``, in run order; SweepError if none is."""
-    done = [run for run in sweep.runs if state(run, out) == "done"]
+    """The runs of ``sweep`` that are done in ``out``, in run order; SweepError if none is.
+    A damaged run is left out, saying so in one line (``sweep run`` redoes it)."""
+    done = []
+    for run in sweep.runs:
+        found, problem = inspect(run, out)
+        if found == "damaged":
+            _report(f"{problem}: run {run.partition} is left out (dronefleet sweep run redoes it)")
+        if found == "done":
+            done.append(run)
     if not done:
         raise SweepError(f"no run of sweep {sweep.name} is done in {out}")
     return done
@@ -801,6 +893,7 @@ def _partition_schema(sweep: Sweep):
 def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     """The summary rows of every done run, in run order: its partition values (grid keys, seed
     key), then its summary (delivery: one row per run; replenishment: one row per trial).
+    Damaged runs (see :func:`damage`) are left out like runs not done, each said in one line.
 
     Written atomically to ``out/collected.parquet``, with the sweep file in the metadata
     (key ``dronefleet.sweep``). Returns ``(table, the runs not done)``.
@@ -813,9 +906,10 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
 
     done = _done_runs(sweep, out)
     schema = _partition_schema(sweep)
+    columns = _part_columns(sweep.runs[0], "summary", sweep.scenario.table_schemas())
     rows = []
     for run in done:
-        summary = pq.read_table(run.path(out, "summary"))
+        summary = read_parquet(run.path(out, "summary"), columns, "part", exact=True)
         partition = {key: pa.array([run.value(key)] * summary.num_rows, schema.field(key).type) for key in run.keys}
         rows.append(pa.table({**partition, **dict(zip(summary.column_names, summary.columns))}))
     table = stamp(pa.concat_tables(rows).replace_schema_metadata({b"dronefleet.sweep": sweep.text}))
@@ -829,12 +923,14 @@ def dataset(sweep: Sweep, out: str | os.PathLike, table: str) -> pyarrow.dataset
     as one ``pyarrow.dataset.Dataset`` whose partition columns have the config's types.
 
     Only the files of the runs that the sweep file gives and that are done (see
-    :func:`state`) are read, in run order: ``out/table`` may also hold partitions of runs
-    the file no longer has (it was cut to fewer seeds, say) and tables of runs killed
-    before their summary, which must not enter a figure. Raises SweepError if no run is done.
+    :func:`state`; a damaged run is left out, said in one line) are read, in run order:
+    ``out/table`` may also hold partitions of runs the file no longer has (it was cut to fewer
+    seeds, say) and tables of runs killed before their summary, which must not enter a figure.
+    Raises SweepError if no run is done.
 
     (Read without a schema, hive partition values come back as strings or int32:
-    ``tau_minutes=15.0`` as the string ``"15.0"``.)
+    ``tau_minutes=15.0`` as the string ``"15.0"``.) :func:`rows` reads it, naming a file
+    damaged inside.
     """
     import pyarrow.dataset as ds
 
@@ -843,6 +939,32 @@ def dataset(sweep: Sweep, out: str | os.PathLike, table: str) -> pyarrow.dataset
     return ds.dataset([str(run.path(out, table)) for run in done], format="parquet",
                       partitioning=ds.partitioning(_partition_schema(sweep), flavor="hive"),
                       partition_base_dir=str(out / table))
+
+
+def rows(sweep: Sweep, out: str | os.PathLike, table: str, data: pyarrow.dataset.Dataset,
+         filter: pyarrow.compute.Expression | None = None) -> pyarrow.Table:
+    """``data.to_table(filter=filter)``, ``data`` being :func:`dataset` of ``table``.
+
+    A file whose footer reads but a page inside does not (garbled where :func:`damage` does
+    not look) is a DataError naming it, found by reading each file whole: remove it, and
+    ``sweep run`` redoes its run.
+    """
+    import pyarrow as pa
+
+    try:
+        return data.to_table(filter=filter)
+    except (pa.ArrowException, OSError) as error:  # ArrowInvalid, ArrowIOError: a page that does not decode
+        out, schemas, files = Path(out), sweep.scenario.table_schemas(), set(data.files)
+        for run in sweep.runs:
+            if (path := str(run.path(out, table))) not in files:
+                continue
+            try:
+                read_parquet(path, _part_columns(run, table, schemas), "part", exact=True)
+            except DataError as damaged:
+                raise DataError(f"{damaged}: remove it, and dronefleet sweep run redoes its run {run.partition}") \
+                    from None
+        first = (str(error).splitlines() or [type(error).__name__])[0][:200]
+        raise DataError(f"the {table} files of sweep {sweep.name} in {out} cannot be read ({first})") from None
 
 
 # --------------------------------------------------------------------------- the commands (see cli.py)
@@ -907,22 +1029,32 @@ def run_command(args: argparse.Namespace) -> int:
 
 
 def _recorded_error(path: Path) -> str:
-    """The error a ``_failed/`` record holds, or why it cannot be read (status never fails on it)."""
+    """The first line of the error a ``_failed/`` record holds, or why the record cannot be read:
+    a damaged record (not a regular file, too large, not ``{"error": "...", ...}``) does not stop
+    status, and the run is not done either way (``sweep run`` redoes it, replacing the record)."""
     try:
-        return str(json.loads(path.read_text(encoding="utf-8"))["error"])[:500]
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        return f"(the record {path.name} cannot be read: {type(error).__name__})"
+        record = read_json(path, "record")
+    except DataError as error:
+        return f"(the record {path.name} cannot be read: {error})"
+    error = record.get("error") if isinstance(record, dict) else None
+    if not isinstance(error, str):
+        return f"(the record {path.name} cannot be read: it holds no \"error\" text)"
+    return (error.splitlines() or [""])[0][:500]
 
 
 def status_command(args: argparse.Namespace) -> int:
-    """``dronefleet sweep status``: done, missing and failed runs (with their errors)."""
+    """``dronefleet sweep status``: done, missing, failed (with their errors) and damaged runs
+    (with the file at fault)."""
     sweep, out = _open(args)
-    found = [state(run, out) for run in sweep.runs]
+    inspected = [inspect(run, out) for run in sweep.runs]
+    found = [s for s, _ in inspected]
     print(f"sweep {sweep.name}: {sweep.describe()} in {out}: " +
-          ", ".join(f"{found.count(s)} {s}" for s in ("done", "missing", "failed")))
-    for run, s in zip(sweep.runs, found):
+          ", ".join(f"{found.count(s)} {s}" for s in ("done", "missing", "failed", "damaged")))
+    for run, (s, problem) in zip(sweep.runs, inspected):
         if s == "failed":
             print(f"  failed   {run.partition}: {_recorded_error(run.failure_path(out))}")
+        elif s == "damaged":
+            print(f"  damaged  {run.partition}: {problem} (sweep run redoes it)")
     unfinished = sorted({i // sweep.runs_per_task for i, s in enumerate(found) if s != "done"})
     if unfinished:
         print(f"  tasks with runs not done: {_ranges(unfinished)} (rerun them: sweep run --task-id N, "

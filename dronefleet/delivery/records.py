@@ -49,6 +49,32 @@ if TYPE_CHECKING:
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 
 
+def _schema(**columns: pa.DataType) -> pa.Schema:
+    return pa.schema(list(columns.items()))
+
+
+_f64, _i16, _i32, _i64 = pa.float64(), pa.int16(), pa.int32(), pa.int64()
+#: Every table's columns and types, as :func:`tables` writes them (the module doc says what
+#: they mean): a sweep checks each file it reads back against them.
+SCHEMAS = {
+    "orders": _schema(order_id=_i32, arrival_s=_f64, arrival_week=_i16, distance_m=_f64, mass_kg=_f64,
+                      attempts=_i16, winners=pa.list_(_i16), delivered_s=_f64, delivery_time_s=_f64),
+    "attempts": _schema(attempt_id=_i32, uav=_i16, order_id=_i32, takeoff_s=_f64, takeoff_soc=_f64,
+                        outcome=pa.string(), parcel_delivered=pa.bool_(), turn_s=_f64, return_s=_f64,
+                        return_soc=_f64, allocated_s=_f64, reserved=pa.bool_(), wait_s=_f64,
+                        forecast_wait_s=_f64, forecast_met=pa.bool_()),
+    "fleet": _schema(week=_i16, t_s=_f64, uav=_i16, soh=_f64, w_distance=_f64, w_mass=_f64, w_soc=_f64,
+                     intercept=_f64, steps=_f64, soc=_f64, lost=pa.bool_(), decision_accuracy=_f64, period=_i16),
+    "timeseries": _schema(t_s=_f64, delivered=_i64, unallocated=_i64, in_flight=_i64, aborted_attempts=_i64,
+                          idle=_i64, lost=_i64, reserved=_i64),
+    "summary": _schema(seed=_i64, rule=pa.string(), tau_minutes=_f64, n_uavs=_i64, horizon_weeks=_f64,
+                       period=_i64, orders_arrived=_i64, delivered=_i64, median_delivery_time_s=_f64,
+                       attempts=_i64, aborted_attempts=_i64, aborted_pct=_f64, pending=_i64, backlog_age_s=_f64,
+                       lost_uavs=_i64, auctions=_i64, decision_accuracy=_f64, reservations_won=_i64,
+                       median_reservation_wait_s=_f64, forecast_met_pct=_f64),
+}
+
+
 def _nullable(values):
     return arrow_array(values, null=np.isnan(values))
 

@@ -25,8 +25,8 @@ if TYPE_CHECKING:
     import pyarrow
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
-           "replace", "value", "read_config", "simulate", "outdated", "format_summary", "describe", "label",
-           "replay_data"]
+           "replace", "value", "read_config", "table_schemas", "simulate", "outdated", "format_summary", "describe",
+           "label", "replay_data"]
 
 NAME = "delivery"
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
@@ -75,6 +75,12 @@ def read_config(path: str | os.PathLike) -> Config:
     from .records import read_config as read
 
     return read(path)
+
+
+def table_schemas() -> dict[str, pyarrow.Schema]:
+    from .records import SCHEMAS
+
+    return SCHEMAS
 
 
 def simulate(config: Config) -> dict[str, pyarrow.Table]:

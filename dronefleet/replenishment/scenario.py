@@ -57,8 +57,8 @@ if TYPE_CHECKING:
     import pyarrow
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "Config", "load",
-           "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "simulate",
-           "format_summary", "describe", "label", "format_bounds", "replay_data"]
+           "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
+           "simulate", "format_summary", "describe", "label", "format_bounds", "replay_data"]
 
 NAME = "replenishment"
 TABLES = ("summary", "timeseries")
@@ -273,6 +273,18 @@ def read_config(path: str | os.PathLike) -> Config:
 
 _PHASES = {"workers": ("charging", "to_work", "working", "to_charge"),
            "chargers": ("charging", "to_transfer", "sharing", "to_base")}
+
+
+def table_schemas() -> dict[str, pyarrow.Schema]:
+    """The columns and types of the tables :func:`simulate` writes (int64 counts, float64 energies)."""
+    import pyarrow as pa
+
+    counts = {"trial", "seed", "tick", "work", "depleted_workers", "depleted_chargers"}
+    phases = [f"{role}_{phase}" for role, names in _PHASES.items() for phase in names]
+    return {table: pa.schema([(name, pa.int64() if name in counts or name in phases else pa.float64())
+                              for name in names])
+            for table, names in (("summary", summary_columns()),
+                                 ("timeseries", ("trial", "tick", *phases, "stored_energy", "work")))}
 
 
 def simulate(config: Config) -> dict[str, pyarrow.Table]:

@@ -55,7 +55,7 @@ import pyarrow.parquet as pq
 
 from .config import shipped_config
 from .delivery import analysis
-from .outputs import probe_folders
+from .outputs import probe_folders, writing
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
@@ -183,13 +183,15 @@ class Study:
 
     def figure_dir(self, figure: str) -> Path:
         path = self.root / figure
-        path.mkdir(parents=True, exist_ok=True)
+        with writing(path):
+            path.mkdir(parents=True, exist_ok=True)
         return path
 
 
 def _write_parquet(frame, path):
     table = stamp(pa.Table.from_pandas(frame, preserve_index=False))
-    write_atomic(path, lambda tmp: pq.write_table(table, tmp))
+    with writing(path):
+        write_atomic(path, lambda tmp: pq.write_table(table, tmp))
     return path
 
 
@@ -306,7 +308,7 @@ def draw_fig19(study: Study) -> list[Path]:
 
     table = _read(study, "fig19", "thresholds")
     d = study.root / "fig19"
-    with tempfile.TemporaryDirectory(dir=d, prefix=".") as tmp:  # renamed into place: never half-written
+    with writing(d / "thresholds"), tempfile.TemporaryDirectory(dir=d, prefix=".") as tmp:  # renamed into place
         paths = [d / p.name for p in figures.write_threshold_table(table, Path(tmp) / "thresholds")]
         for path in paths:
             os.replace(Path(tmp) / path.name, path)

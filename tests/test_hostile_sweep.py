@@ -9,6 +9,7 @@ the sweep's process is killed.
 
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -468,3 +469,69 @@ def test_status_reports_an_unreadable_failure_record_instead_of_failing(tmp_path
     captured = capsys.readouterr()
     assert "Traceback" not in captured.err
     assert f"failed   {s.runs[0].partition}: (the record {record.name} cannot be read" in captured.out
+
+
+# ---------------------------------------------------------------------------- the job-array script of `sweep plan`
+
+
+@pytest.mark.parametrize("flags, fragment", [
+    (["--time", "1:00\ntouch x"], "--time '1:00\\ntouch x' is not a SLURM time limit"),  # a command line of its own
+    (["--time", "1:00\rtouch x"], "--time '1:00\\rtouch x' is not a SLURM time limit"),
+    (["--time", "30m"], "--time '30m' is not a SLURM time limit: minutes, MM:SS, HH:MM:SS, D-HH"),
+    (["--time", "1:00 --wrap=x"], "--time '1:00 --wrap=x' is not"),
+    (["--time", "1:2:3:4"], "--time '1:2:3:4' is not"),
+    (["--partition", "a b"], "--partition 'a b' is not partition names"),
+    (["--partition", "short,"], "--partition 'short,' is not"),
+    (["--partition", "x\x00y"], "--partition 'x\\x00y' is not"),
+    (["--account", "$(id)"], "--account '$(id)' is not an account name"),
+    (["--account", "lab,other"], "--account 'lab,other' is not"),
+    (["--results", "{tmp}/new\nline"], "--results '{tmp}/new\\nline' holds the control character '\\n', which a "
+                                       "job script cannot carry safely"),
+    (["--results", "{tmp}/esc\x1b[2J"], "holds the control character '\\x1b'"),
+    (["--results", "{tmp}/not-utf8-\udcff"], "holds a byte that is not UTF-8"),
+    (["--results", "{tmp}/back\\slash"], "holds a backslash (an escape to sbatch)"),
+    (["--out", "{tmp}/x\n.sbatch"], "--out '{tmp}/x\\n.sbatch' holds the control character '\\n'"),
+])
+def test_hostile_plan_values_are_refused_before_anything_is_made(tmp_path, capsys, no_array, flags, fragment):
+    flags = [flag.format(tmp=tmp_path) for flag in flags]
+    if "--results" not in flags:
+        flags += ["--results", str(tmp_path / "results")]
+    refused(capsys, ["sweep", "plan", str(SMOKE), *flags], fragment.format(tmp=tmp_path), tmp_path)
+
+
+@pytest.mark.parametrize("time_limit", ["30", "30:00", "12:30:00", "2-12", "2-12:30", "2-12:30:00", "UNLIMITED"])
+def test_every_slurm_time_format_is_taken(tmp_path, capsys, time_limit):
+    assert cli.main(["sweep", "plan", str(SMOKE), "--results", str(tmp_path), "--time", time_limit]) == 0
+    assert f"\n#SBATCH --time={time_limit}\n" in (tmp_path / "smoke" / "smoke.sbatch").read_text()
+
+
+def test_the_job_script_keeps_hostile_paths_literal(tmp_path, monkeypatch, capsys):
+    """Paths that hold spaces, quotes, % and ``$(...)`` reach the task's command as they are:
+    bash (and sbatch, whose #SBATCH parser takes the same quotes) expands nothing."""
+    hostile = "a $(touch {}) it's `touch {}` %x"
+    here = tmp_path / hostile.format("here-ran", "here-ran")
+    (here / "sweeps").mkdir(parents=True)
+    sweep = here / "sweeps" / hostile.format("sweep-ran", "sweep-ran").replace("%x", "x.toml")
+    sweep.write_text(SMOKE.read_text())
+    results = here / hostile.format("results-ran", "results-ran")
+    monkeypatch.chdir(here)
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert cli.main(["sweep", "plan", str(sweep), "--results", str(results)]) == 0
+    script = results / "smoke" / "smoke.sbatch"
+    assert f"sbatch {shlex.quote(str(script))}" in capsys.readouterr().out  # a command that can be pasted
+    text = script.read_text()
+    assert subprocess.run(["bash", "-n", str(script)]).returncode == 0
+    output = [line for line in text.splitlines() if line.startswith("#SBATCH --output=")]
+    assert shlex.split(output[0].removeprefix("#SBATCH ")) == [
+        f"--output={str(results).replace('%', '%%')}/smoke/_logs/%A_%a.out"]  # %% is SLURM's literal %
+    # Run the script with its last line printing the words it would exec, instead of exec'ing them.
+    assert text.count("\nexec ") == 1
+    shown = script.with_name("shown.sh")
+    shown.write_text(text.replace("\nexec ", "\nprintf '%s\\n' \"$PWD\" \"$NUMBA_CACHE_DIR\" "))
+    done = subprocess.run(["bash", str(shown)], cwd=tmp_path, capture_output=True, text=True,
+                          env={**os.environ, "SLURM_ARRAY_TASK_ID": "1"})
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [str(here), str(results / "_numba_cache"), sys.executable, "-m",
+                                        "dronefleet.cli", "sweep", "run", str(sweep), "--results", str(results),
+                                        "--task-id", "1"]
+    assert not list(tmp_path.rglob("*-ran")), "a command in a path was run"

@@ -105,7 +105,7 @@ from urllib.parse import quote
 
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, read_toml
-from .outputs import OutputError, probe_folders
+from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
 
 if TYPE_CHECKING:
@@ -724,8 +724,9 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
         results = executors.local(function, todo, jobs)
     else:  # connects here: an unreachable scheduler is refused before anything is written
         results = executors.dask(function, todo, scheduler, keys=[f"{sweep.name}/{run.id}" for run in todo])
-    out.mkdir(parents=True, exist_ok=True)
-    _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
+    with writing(out / LAYOUT_FILE):
+        out.mkdir(parents=True, exist_ok=True)
+        _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
     failures = {}
     for finished, (run, error, crash) in enumerate(results, start=1):
         if crash is not None:
@@ -750,7 +751,7 @@ def _ranges(numbers) -> str:
     return ",".join(str(s[0]) if len(s) == 1 else f"{s[0]}-{s[-1]}" for s in spans)
 
 
-#: How the job-array scripts of ``sweep plan`` begin.
+#: A job script's header: ``sweep plan`` replaces an existing file at its ``--out`` only if it starts so.
 SCRIPT_HEAD = "#!/bin/bash\n# Job array of the dronefleet sweep "
 #: What bash, sbatch or a terminal could take for anything but a character of a value: control
 #: characters (C0, DEL, C1: newline, CR, NUL, ESC, ...) and the lone surrogates that stand for
@@ -852,7 +853,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     key), then its summary (delivery: one row per run; replenishment: one row per trial).
 
     Written atomically to ``out/collected.parquet``, with the sweep file in the metadata
-    (key ``dronefleet.sweep``). Returns ``(table, the runs not done)``.
+    (key ``dronefleet.sweep``). Returns ``(table, the runs not done)``. A path there that is
+    not a regular file, or a write that fails (disk full), is an OutputError (one line).
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -861,6 +863,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     from .records import write_atomic
 
     done = _done_runs(sweep, out)
+    path = out / "collected.parquet"
+    check_output_file(path, "the summary table", "move it away or give another --results")
     schema = _partition_schema(sweep)
     rows = []
     for run in done:
@@ -868,7 +872,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
         partition = {key: pa.array([run.value(key)] * summary.num_rows, schema.field(key).type) for key in run.keys}
         rows.append(pa.table({**partition, **dict(zip(summary.column_names, summary.columns))}))
     table = stamp(pa.concat_tables(rows).replace_schema_metadata({b"dronefleet.sweep": sweep.text}))
-    write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
+    with writing(path):
+        write_atomic(path, lambda tmp: pq.write_table(table, tmp))
     finished = set(done)
     return table, [run for run in sweep.runs if run not in finished]
 
@@ -904,19 +909,41 @@ def _open(args) -> tuple[Sweep, Path]:
     return sweep, out
 
 
+def _is_job_script(path: Path) -> bool:
+    """Whether the regular file ``path`` starts as the scripts of ``sweep plan`` do (:data:`SCRIPT_HEAD`)."""
+    head = SCRIPT_HEAD.encode()
+    try:
+        # O_NONBLOCK: a file swapped for a pipe since it was found regular does not block the open
+        with os.fdopen(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
+            return fh.read(len(head)) == head
+    except OSError:
+        return False
+
+
 def plan_command(args: argparse.Namespace) -> int:
-    """``dronefleet sweep plan``: print the runs and tasks, write the job-array script."""
+    """``dronefleet sweep plan``: print the runs and tasks, write the job-array script.
+
+    The script is built (refusing unsafe values) and its path checked before anything is
+    made: ``--out`` may not replace a folder, a special file, a file other than an earlier
+    job-array script, nor any file of the dataset but its own ``<name>.sbatch``. It is written
+    atomically: a failed write leaves nothing.
+    """
+    from .records import write_atomic
+
     sweep, out = _open(args)
-    script = Path(_script_value(args.out, "--out")) if args.out else out / f"{sweep.name}.sbatch"
-    text = job_script(sweep, Path(args.results), args.time, args.partition, args.account)  # refuses unsafe values
-    if script.is_dir():
-        raise SweepError(f"--out {str(script)!r} is a folder: give the path of the job-array script file")
+    own = out / f"{sweep.name}.sbatch"
+    script = Path(_script_value(args.out, "--out")) if args.out else own
+    text = job_script(sweep, Path(args.results), args.time, args.partition, args.account)
+    if Path(os.path.abspath(script)).is_relative_to(os.path.abspath(out)) and \
+            os.path.abspath(script) != os.path.abspath(own):
+        raise SweepError(f"--out {str(script)!r} lies inside the dataset {str(out)!r}, whose files it would "
+                         f"replace: give {str(own)!r} (the default) or a file outside it")
+    check_output_file(script, "--out", "give the path of the job-array script file",
+                      replaceable=_is_job_script, kind="a job-array script that dronefleet sweep plan wrote")
     # SLURM does not create the log directory; on refusal, nothing is left made
     _probe([script.parent, out / "_logs"], "--out must be a file in a writable folder, --results a writable folder")
-    try:
-        script.write_text(text, encoding="utf-8")
-    except OSError as error:
-        raise SweepError(f"cannot write the job-array script {str(script)!r}: {error.strerror or error}") from None
+    with writing(script):
+        write_atomic(script, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     print(f"sweep {sweep.name}: {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs")
     print(f"  job-array script  {script}")
     print(f"  submit it with    sbatch {shlex.quote(str(script))}")

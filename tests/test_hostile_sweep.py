@@ -535,3 +535,113 @@ def test_the_job_script_keeps_hostile_paths_literal(tmp_path, monkeypatch, capsy
                                         "dronefleet.cli", "sweep", "run", str(sweep), "--results", str(results),
                                         "--task-id", "1"]
     assert not list(tmp_path.rglob("*-ran")), "a command in a path was run"
+
+
+def _dataset_with_layout(root):
+    out = root / "smoke"
+    out.mkdir(parents=True)
+    (out / "_layout.json").write_text('{"keys": ["rule", "tau_minutes", "seed"]}\n')
+    return out
+
+
+def test_plan_never_replaces_a_dataset_file_a_special_file_or_a_file_it_did_not_write(tmp_path, capsys):
+    results = tmp_path / "results"
+    out = _dataset_with_layout(results)
+    (tmp_path / "notes.txt").write_text("mine")
+    os.mkfifo(tmp_path / "pipe")
+    before = snapshot(tmp_path)
+    for target, fragment in [
+        (out / "_layout.json", f"--out {str(out / '_layout.json')!r} lies inside the dataset {str(out)!r}, "
+                               f"whose files it would replace: give {str(out / 'smoke.sbatch')!r}"),
+        (out / "_logs" / "x.sbatch", "lies inside the dataset"),
+        (tmp_path / "notes.txt", f"--out {str(tmp_path / 'notes.txt')!r} exists and is not a job-array script "
+                                 "that dronefleet sweep plan wrote, so it is not replaced"),
+        (tmp_path / "pipe", f"--out {str(tmp_path / 'pipe')!r} is a named pipe (FIFO), which writing would "
+                            "replace with a regular file"),
+        (SMOKE, "exists and is not a job-array script"),
+    ]:
+        assert run_cli(["sweep", "plan", str(SMOKE), "--results", str(results), "--out", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and len(err.splitlines()) == 1 and fragment in err, err
+        assert snapshot(tmp_path) == before
+    assert (tmp_path / "pipe").is_fifo()
+    # its own scripts are written again: in the dataset, and anywhere else it wrote one
+    for target in (out / "smoke.sbatch", tmp_path / "smoke.sh"):
+        for _ in range(2):
+            assert run_cli(["sweep", "plan", str(SMOKE), "--results", str(results), "--out", str(target)]) == 0
+        assert target.read_text().startswith(sw.SCRIPT_HEAD)
+
+
+def _disk_full_after(monkeypatch, module, name, keep=100):
+    """``module.name`` (a writer whose second argument, or self, is the path) writes ``keep`` bytes
+    of its output, then fails as a full disk does."""
+    import errno
+
+    def full(*args, **kwargs):
+        path = args[1] if not isinstance(args[0], Path) else args[0]
+        Path(path).write_bytes(b"x" * keep)
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(module, name, full)
+
+
+def test_a_script_write_that_fails_is_one_line_and_leaves_nothing(tmp_path, capsys, monkeypatch):
+    out = _dataset_with_layout(tmp_path)
+    (out / "_logs").mkdir()
+    script = out / "smoke.sbatch"
+    before = snapshot(tmp_path)
+    _disk_full_after(monkeypatch, Path, "write_text")
+    assert run_cli(["sweep", "plan", str(SMOKE), "--results", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"cannot write {str(script)!r}: No space left on device" in err
+    assert snapshot(tmp_path) == before  # no script, whole or partial, and no hidden temporary
+
+
+@pytest.fixture(scope="module")
+def tiny_done(tmp_path_factory):
+    """The results root of the tiny delivery sweep, run (4 runs)."""
+    from conftest import TINY_SWEEPS
+
+    root = tmp_path_factory.mktemp("tiny")
+    (root / "tiny.toml").write_text(TINY_SWEEPS["delivery"])
+    assert cli.main(["sweep", "run", str(root / "tiny.toml"), "--results", str(root / "results"), "--jobs", "1"]) == 0
+    return root
+
+
+def test_a_collect_write_that_fails_is_one_line_and_leaves_nothing(tiny_done, capsys, monkeypatch):
+    import pyarrow.parquet as pq
+
+    out = tiny_done / "results" / "tiny"
+    before = snapshot(tiny_done)
+    _disk_full_after(monkeypatch, pq, "write_table")
+    assert run_cli(["sweep", "collect", str(tiny_done / "tiny.toml"), "--results", str(tiny_done / "results")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"cannot write {str(out / 'collected.parquet')!r}: No space left on device" in err
+    assert snapshot(tiny_done) == before
+
+
+def test_collect_never_replaces_a_special_file(tiny_done, capsys):
+    collected = tiny_done / "results" / "tiny" / "collected.parquet"
+    os.mkfifo(collected)
+    try:
+        assert run_cli(["sweep", "collect", str(tiny_done / "tiny.toml"), "--results",
+                        str(tiny_done / "results")]) == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and f"{str(collected)!r} is a named pipe (FIFO)" in err, err
+        assert collected.is_fifo()
+    finally:
+        collected.unlink()
+
+
+def test_a_layout_write_that_fails_is_one_line(tmp_path, capsys, monkeypatch, no_array):
+    import errno
+
+    def full(sweep, out):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(sw, "_record_layout", full)
+    monkeypatch.setattr(sw, "execute", lambda run, out: pytest.fail("a run ran"))
+    assert run_cli(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--jobs", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"cannot write {str(tmp_path / 'smoke' / '_layout.json')!r}: No space left on device" in err

@@ -22,8 +22,6 @@ from pathlib import Path
 from types import ModuleType
 from typing import NamedTuple
 
-from .outputs import writing
-
 DPI = 150
 #: The formats every figure is written in, side by side (same name, these suffixes).
 FORMATS = ("png", "pdf", "svg")
@@ -118,9 +116,8 @@ def _figure(path, figsize, **subplots):
         for target, suffix in zip(figure_paths(path), FORMATS):
             tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
             try:
-                with writing(target):  # disk full, read-only: one line, not a traceback
-                    fig.savefig(tmp, dpi=DPI, format=suffix, metadata=_NO_STAMPS[suffix])
-                    os.replace(tmp, target)
+                fig.savefig(tmp, dpi=DPI, format=suffix, metadata=_NO_STAMPS[suffix])
+                os.replace(tmp, target)
             finally:
                 tmp.unlink(missing_ok=True)
 

@@ -308,7 +308,7 @@ def draw_fig19(study: Study) -> list[Path]:
 
     table = _read(study, "fig19", "thresholds")
     d = study.root / "fig19"
-    with writing(d / "thresholds"), tempfile.TemporaryDirectory(dir=d, prefix=".") as tmp:  # renamed into place
+    with tempfile.TemporaryDirectory(dir=d, prefix=".") as tmp:  # renamed into place: never half-written
         paths = [d / p.name for p in figures.write_threshold_table(table, Path(tmp) / "thresholds")]
         for path in paths:
             os.replace(Path(tmp) / path.name, path)
@@ -379,7 +379,8 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
             for name in NEEDS[figure]:
                 study.ensure(name)
             TIDY[figure](study)
-        drawn[figure] = DRAW[figure](study)
+        with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
+            drawn[figure] = DRAW[figure](study)
         log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
             f"({time.perf_counter() - start:.1f} s)")
     return drawn

@@ -18,7 +18,7 @@ from typing import Any
 from . import console, provenance, scenarios, sweeps
 from .config import ConfigError
 from .delivery.config import SECONDS_PER_WEEK, load_config
-from .outputs import OutputError, probe_folders, writing
+from .outputs import OutputError, check_output_file, probe_folders, writing
 
 log = logging.getLogger("dronefleet.cli")  # not __name__: python -m dronefleet.cli runs it as __main__
 
@@ -64,7 +64,8 @@ def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: I
 
     ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder (of the table
     names ``tables``, by default delivery's); its parent and ``save_fleet``'s folder must be
-    writable; ``save_fleet`` must not exist unless ``overwrite``.
+    writable; ``save_fleet`` must not exist unless ``overwrite``, and never be a folder or a
+    special file (a named pipe, a device).
     """
     from .delivery.records import TABLES
     from .records import clean_leftovers, run_dir_state
@@ -87,8 +88,7 @@ def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: I
         held = "a complete run" if state == "complete" else "part of a run"
         raise OutputError(f"{out} exists and holds {held}; pass --overwrite to replace it or choose another --out")
     if save_fleet is not None:
-        if save_fleet.is_dir():
-            raise OutputError(f"--save-fleet {str(save_fleet)!r} is a folder; it must be a file")
+        check_output_file(save_fleet, "--save-fleet", "it must be a file")
         if save_fleet.exists() and not overwrite:
             raise OutputError(f"--save-fleet {str(save_fleet)!r} exists; pass --overwrite to replace it "
                               "or choose another --save-fleet")

@@ -1,5 +1,6 @@
-"""Output paths checked before any work: folders that cannot take a run's files are refused in
-one line (:class:`OutputError`), and an OSError while writing becomes such a line too.
+"""Output paths checked before any work: folders that cannot take a run's files, and output files
+that must not be replaced, are refused in one line (:class:`OutputError`), and an OSError while
+writing becomes such a line too.
 
 Shared by ``dronefleet run`` (:mod:`dronefleet.cli`) and the sweeps (:mod:`dronefleet.sweeps`);
 standard library only, so the command line stays quick to start.
@@ -7,8 +8,9 @@ standard library only, so the command line stays quick to start.
 
 import errno
 import os
+import stat
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
@@ -45,3 +47,33 @@ def probe_folders(folders: Iterable[Path]) -> None:
             with suppress(OSError):
                 path.rmdir()
         raise
+
+
+def check_output_file(path: str | os.PathLike, flag: str, allowed: str,
+                      replaceable: Callable[[Path], bool] | None = None, kind: str = "") -> None:
+    """Refuse (OutputError), before any work, an output file ``path`` that writing it must not replace.
+
+    Files are written by a rename over ``path`` (:func:`dronefleet.records.write_atomic`), which
+    replaces whatever is there: so a folder is refused, and so is a special file (a named pipe,
+    a device such as ``/dev/null``, a socket), which would become a regular file. With
+    ``replaceable``, an existing regular file is replaced only if ``replaceable(path)`` is true
+    (an earlier output of the same command, not one of the user's files); ``kind`` says what
+    such a file is. A symbolic link is judged by its target. A path that cannot be looked at
+    (its folder is missing or a file) passes: :func:`probe_folders` of its folder names the
+    problem. ``flag`` names the option in messages, ``allowed`` what it must be.
+    """
+    path = Path(path)
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):  # ValueError: a NUL byte in the path
+        return
+    shown = f"{flag} {str(path)!r}"
+    if stat.S_ISDIR(mode):
+        raise OutputError(f"{shown} is a folder; {allowed}")
+    if not stat.S_ISREG(mode):
+        special = ("a named pipe (FIFO)" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode)
+                   else "a device")
+        raise OutputError(f"{shown} is {special}, which writing would replace with a regular file; {allowed}")
+    if replaceable is not None and not replaceable(path):
+        raise OutputError(f"{shown} exists and is not {kind}, so it is not replaced: remove it or choose "
+                          f"another {flag}")

@@ -18,7 +18,7 @@ from typing import Any
 
 from . import scenarios
 from .config import SCENARIO_KEY, ConfigError
-from .outputs import writing
+from .outputs import check_output_file, writing
 from .records import CONFIG_KEY, REPLAY_FILE, run_dir_state, write_atomic
 
 __all__ = ["scenario_of_run", "page", "write"]
@@ -85,8 +85,9 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
     """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
-    table that is another run's or cannot be read, or if ``out`` cannot be written (a folder, a missing or
-    read-only parent, a file in a run folder other than ``run_dir``'s own ``replay.html``, ...).
+    table that is another run's or cannot be read, or if ``out`` cannot be written (a folder, a special
+    file such as a named pipe or a device, a missing or read-only parent, a file in a run folder other
+    than ``run_dir``'s own ``replay.html``, ...).
     """
     import pyarrow as pa
 
@@ -94,6 +95,7 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
     scenario = scenario_of_run(run_dir)
     if out.is_dir():
         raise ConfigError(f"--out {str(out)!r} is a folder; give the page's file name, e.g. {out / REPLAY_FILE}")
+    check_output_file(out, "--out", "give the path of a file for the page")  # /dev/null stays a device
     if not out.parent.is_dir():
         raise ConfigError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
     # in a run folder, any other file would overwrite a table, make the folder no longer a run,

@@ -55,7 +55,7 @@ import pyarrow.parquet as pq
 
 from .config import shipped_config
 from .delivery import analysis
-from .outputs import probe_folders
+from .outputs import probe_folders, writing
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
@@ -183,13 +183,15 @@ class Study:
 
     def figure_dir(self, figure: str) -> Path:
         path = self.root / figure
-        path.mkdir(parents=True, exist_ok=True)
+        with writing(path):
+            path.mkdir(parents=True, exist_ok=True)
         return path
 
 
 def _write_parquet(frame, path):
     table = stamp(pa.Table.from_pandas(frame, preserve_index=False))
-    write_atomic(path, lambda tmp: pq.write_table(table, tmp))
+    with writing(path):
+        write_atomic(path, lambda tmp: pq.write_table(table, tmp))
     return path
 
 
@@ -377,7 +379,8 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
             for name in NEEDS[figure]:
                 study.ensure(name)
             TIDY[figure](study)
-        drawn[figure] = DRAW[figure](study)
+        with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
+            drawn[figure] = DRAW[figure](study)
         log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
             f"({time.perf_counter() - start:.1f} s)")
     return drawn

@@ -111,7 +111,7 @@ from urllib.parse import quote
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, read_toml
 from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
-from .outputs import OutputError, probe_folders
+from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
 
 if TYPE_CHECKING:
@@ -685,6 +685,11 @@ def _probe(folders, allowed: str, keep: bool = True) -> None:
 # --------------------------------------------------------------------------- running a sweep
 
 
+def _shown(value: str, limit: int = 80) -> str:
+    """``value`` as a message shows it: repr (one line, control characters escaped), cut to ``limit``."""
+    return repr(value) if len(value) <= limit else f"{value[:limit]!r}... ({len(value)} characters)"
+
+
 def check_scheduler(address: str) -> str:
     """``address`` if it is a Dask scheduler address ``[protocol://]host:port``; SweepError otherwise.
 
@@ -693,10 +698,9 @@ def check_scheduler(address: str) -> str:
     """
     match = _SCHEDULER.fullmatch(address)
     if match is None or len(match["host"]) > 253 or not 1 <= int(match["port"]) <= 65535:
-        shown = repr(address) if len(address) <= 80 else f"{address[:80]!r}... ({len(address)} characters)"
-        raise SweepError(f"--scheduler {shown} is not a Dask scheduler address: expected [protocol://]host:port, "
-                         "protocol tcp (the default), tls, ucx, ws or wss, host a name (at most 253 "
-                         "characters) or an IP address, port 1-65535 (e.g. tcp://10.0.0.1:8786)")
+        raise SweepError(f"--scheduler {_shown(address)} is not a Dask scheduler address: expected "
+                         "[protocol://]host:port, protocol tcp (the default), tls, ucx, ws or wss, host a name "
+                         "(at most 253 characters) or an IP address, port 1-65535 (e.g. tcp://10.0.0.1:8786)")
     return address
 
 
@@ -736,8 +740,7 @@ def task_from_environment(environ: Mapping[str, str] = os.environ, n_tasks: int 
         # more are beyond any array (and int() refuses thousands of them)
         index = int(value) if value.isascii() and value.isdigit() and len(value) < 19 else -1
         if index < first or (last is not None and index > last):
-            shown = repr(value) if len(value) <= 40 else f"{value[:40]!r}... ({len(value)} characters)"
-            raise SweepError(f"{variable}={shown} is not a job-array task of this sweep: expected {allowed}"
+            raise SweepError(f"{variable}={_shown(value, 40)} is not a job-array task of this sweep: expected {allowed}"
                              + (f" ({n_tasks} tasks)" if n_tasks is not None else ""), [variable])
         tasks[variable] = index - first
     if len(set(tasks.values())) > 1:
@@ -806,8 +809,9 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
         results = executors.local(function, todo, jobs)
     else:  # connects here: an unreachable scheduler is refused before anything is written
         results = executors.dask(function, todo, scheduler, keys=[f"{sweep.name}/{run.id}" for run in todo])
-    out.mkdir(parents=True, exist_ok=True)
-    _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
+    with writing(out / LAYOUT_FILE):
+        out.mkdir(parents=True, exist_ok=True)
+        _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
     failures = {}
     for finished, (run, error, crash) in enumerate(results, start=1):
         if crash is not None:
@@ -832,6 +836,39 @@ def _ranges(numbers) -> str:
     return ",".join(str(s[0]) if len(s) == 1 else f"{s[0]}-{s[-1]}" for s in spans)
 
 
+#: A job script's header: ``sweep plan`` replaces an existing file at its ``--out`` only if it starts so.
+SCRIPT_HEAD = "#!/bin/bash\n# Job array of the dronefleet sweep "
+#: What bash, sbatch or a terminal could take for anything but a character of a value: control
+#: characters (C0, DEL, C1: newline, CR, NUL, ESC, ...) and the lone surrogates that stand for
+#: bytes that are not UTF-8.
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\ud800-\udfff]")
+#: SLURM's time limits: minutes, minutes:seconds, hours:minutes:seconds, days-hours,
+#: days-hours:minutes, days-hours:minutes:seconds; or no limit.
+_SLURM_TIME = re.compile(r"(?:[0-9]{1,9}-)?[0-9]{1,9}(?::[0-9]{1,9}){0,2}|(?i:unlimited|infinite)")
+#: A SLURM partition or account name (``--partition`` takes several, comma-separated).
+_SLURM_NAME = r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,127}"
+_SLURM_FORMATS = {"time": (_SLURM_TIME, "a SLURM time limit: minutes, MM:SS, HH:MM:SS, D-HH, D-HH:MM or "
+                                        "D-HH:MM:SS (e.g. 00:30:00), or UNLIMITED"),
+                  "partition": (re.compile(rf"{_SLURM_NAME}(?:,{_SLURM_NAME})*"),
+                                "partition names (letters, digits, '_', '.', '-'; at most 128 each), comma-separated"),
+                  "account": (re.compile(_SLURM_NAME), "an account name (letters, digits, '_', '.', '-'; at most 128)")}
+
+
+def _script_value(value: str | os.PathLike, what: str, sbatch: bool = False) -> str:
+    """``value`` as text for a job script, refused (SweepError) if it holds a control character
+    (a newline would start a command of its own) or a byte that is not UTF-8; with ``sbatch``
+    (an ``#SBATCH`` line), also a backslash, which sbatch's parser takes as an escape even
+    inside quotes."""
+    text = os.fspath(value)
+    bad = _CONTROL.search(text) or (re.search(r"\\", text) if sbatch else None)
+    if bad:
+        kind = ("a backslash (an escape to sbatch)" if bad[0] == "\\" else "a byte that is not UTF-8"
+                if "\ud800" <= bad[0] <= "\udfff" else f"the control character {bad[0]!r}")
+        raise SweepError(f"{what} {_shown(text)} holds {kind}, which a job script cannot carry safely: "
+                         "rename it, or give another")
+    return text
+
+
 def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, partition: str | None = None,
                account: str | None = None) -> str:
     """A SLURM job-array script running every task of ``sweep`` into ``results``/<name>.
@@ -839,30 +876,43 @@ def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, parti
     Paths are absolute and the python is this one (``sys.executable``), so the script works
     from any directory; it changes to the current directory, against which config paths
     (``run.fleet_file``) are resolved.
+
+    Every value is quoted (``shlex.quote``: bash and sbatch take it as one literal word), and
+    refused (SweepError) before anything is written if it holds a control character or a byte
+    that is not UTF-8; ``time_limit``, ``partition`` and ``account`` must have SLURM's formats
+    (see :data:`_SLURM_FORMATS`).
     """
-    results = results.absolute()
+    for flag, value in (("time", time_limit), ("partition", partition), ("account", account)):
+        pattern, allowed = _SLURM_FORMATS[flag]
+        if value is not None and not pattern.fullmatch(value):
+            raise SweepError(f"--{flag} {_shown(value)} is not {allowed}")
+    results = Path(_script_value(results.absolute(), "--results", sbatch=True))
     out = results / sweep.name
+    here = _script_value(Path.cwd(), "the working directory")
+    words = [_script_value(sys.executable, "the python"), "-m", "dronefleet.cli", "sweep", "run",
+             _script_value(sweep.path, "the sweep file"), "--results", str(results)]
+    # in --output, % starts SLURM's file name patterns (%A job, %a task): the folder's own is %%
+    logs = str(out / "_logs").replace("%", "%%") + "/%A_%a.out"
     options = [f"--job-name=dronefleet-{sweep.name}", f"--array=0-{sweep.n_tasks - 1}", "--cpus-per-task=1",
-               f"--output={out / '_logs' / '%A_%a.out'}"]
-    options += [f"--{flag}={value}" for flag, value in
+               f"--output={shlex.quote(logs)}"]
+    options += [f"--{flag}={shlex.quote(value)}" for flag, value in
                 (("time", time_limit), ("partition", partition), ("account", account)) if value]
-    command = " ".join(shlex.quote(str(word)) for word in
-                       (sys.executable, "-m", "dronefleet.cli", "sweep", "run", sweep.path, "--results", results))
+    cache = shlex.quote(str(results / "_numba_cache"))
     return "\n".join([
-        "#!/bin/bash",
-        f"# Job array of the dronefleet sweep {sweep.name} ({sweep.path}):",
+        f"{SCRIPT_HEAD}{sweep.name} ({shlex.quote(str(sweep.path))}):",
         f"# {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs.",
         "# Written by `dronefleet sweep plan`; submit it with `sbatch` (on its own, or with --array=<tasks>",
         "# to rerun some): a task skips its runs that are done and redoes the others.",
         *(f"#SBATCH {option}" for option in options),
         "set -euo pipefail",
-        f"cd {shlex.quote(str(Path.cwd()))}",
+        f"cd {shlex.quote(here)}",
         "# numba caches the compiled engine beside the installed package (or under ~/.cache if that",
         "# is read-only). On a cluster both may be unwritable or not shared, and then every task",
         "# compiles the engine again (~20 s). This cache, on the shared results filesystem, is",
-        "# filled by the first tasks and loaded by the others.",
-        f"export NUMBA_CACHE_DIR=\"${{NUMBA_CACHE_DIR:-{results / '_numba_cache'}}}\"",
-        f"exec {command} --task-id \"$SLURM_ARRAY_TASK_ID\"",
+        "# filled by the first tasks and loaded by the others (unless NUMBA_CACHE_DIR is set).",
+        f"if [ -z \"${{NUMBA_CACHE_DIR:-}}\" ]; then NUMBA_CACHE_DIR={cache}; fi",
+        "export NUMBA_CACHE_DIR",
+        f"exec {' '.join(shlex.quote(word) for word in words)} --task-id \"$SLURM_ARRAY_TASK_ID\"",
         "",
     ])
 
@@ -896,7 +946,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     Damaged runs (see :func:`damage`) are left out like runs not done, each said in one line.
 
     Written atomically to ``out/collected.parquet``, with the sweep file in the metadata
-    (key ``dronefleet.sweep``). Returns ``(table, the runs not done)``.
+    (key ``dronefleet.sweep``). Returns ``(table, the runs not done)``. A path there that is
+    not a regular file, or a write that fails (disk full), is an OutputError (one line).
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -905,6 +956,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     from .records import write_atomic
 
     done = _done_runs(sweep, out)
+    path = out / "collected.parquet"
+    check_output_file(path, "the summary table", "move it away or give another --results")
     schema = _partition_schema(sweep)
     columns = _part_columns(sweep.runs[0], "summary", sweep.scenario.table_schemas())
     rows = []
@@ -913,7 +966,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
         partition = {key: pa.array([run.value(key)] * summary.num_rows, schema.field(key).type) for key in run.keys}
         rows.append(pa.table({**partition, **dict(zip(summary.column_names, summary.columns))}))
     table = stamp(pa.concat_tables(rows).replace_schema_metadata({b"dronefleet.sweep": sweep.text}))
-    write_atomic(out / "collected.parquet", lambda tmp: pq.write_table(table, tmp))
+    with writing(path):
+        write_atomic(path, lambda tmp: pq.write_table(table, tmp))
     finished = set(done)
     return table, [run for run in sweep.runs if run not in finished]
 
@@ -977,21 +1031,44 @@ def _open(args) -> tuple[Sweep, Path]:
     return sweep, out
 
 
+def _is_job_script(path: Path) -> bool:
+    """Whether the regular file ``path`` starts as the scripts of ``sweep plan`` do (:data:`SCRIPT_HEAD`)."""
+    head = SCRIPT_HEAD.encode()
+    try:
+        # O_NONBLOCK: a file swapped for a pipe since it was found regular does not block the open
+        with os.fdopen(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
+            return fh.read(len(head)) == head
+    except OSError:
+        return False
+
+
 def plan_command(args: argparse.Namespace) -> int:
-    """``dronefleet sweep plan``: print the runs and tasks, write the job-array script."""
+    """``dronefleet sweep plan``: print the runs and tasks, write the job-array script.
+
+    The script is built (refusing unsafe values) and its path checked before anything is
+    made: ``--out`` may not replace a folder, a special file, a file other than an earlier
+    job-array script, nor any file of the dataset but its own ``<name>.sbatch``. It is written
+    atomically: a failed write leaves nothing.
+    """
+    from .records import write_atomic
+
     sweep, out = _open(args)
-    script = Path(args.out) if args.out else out / f"{sweep.name}.sbatch"
-    if script.is_dir():
-        raise SweepError(f"--out {str(script)!r} is a folder: give the path of the job-array script file")
+    own = out / f"{sweep.name}.sbatch"
+    script = Path(_script_value(args.out, "--out")) if args.out else own
+    text = job_script(sweep, Path(args.results), args.time, args.partition, args.account)
+    if Path(os.path.abspath(script)).is_relative_to(os.path.abspath(out)) and \
+            os.path.abspath(script) != os.path.abspath(own):
+        raise SweepError(f"--out {str(script)!r} lies inside the dataset {str(out)!r}, whose files it would "
+                         f"replace: give {str(own)!r} (the default) or a file outside it")
+    check_output_file(script, "--out", "give the path of the job-array script file",
+                      replaceable=_is_job_script, kind="a job-array script that dronefleet sweep plan wrote")
     # SLURM does not create the log directory; on refusal, nothing is left made
     _probe([script.parent, out / "_logs"], "--out must be a file in a writable folder, --results a writable folder")
-    try:
-        script.write_text(job_script(sweep, Path(args.results), args.time, args.partition, args.account))
-    except OSError as error:
-        raise SweepError(f"cannot write the job-array script {str(script)!r}: {error.strerror or error}") from None
+    with writing(script):
+        write_atomic(script, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     print(f"sweep {sweep.name}: {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs")
     print(f"  job-array script  {script}")
-    print(f"  submit it with    sbatch {script}")
+    print(f"  submit it with    sbatch {shlex.quote(str(script))}")
     return 0
 
 

@@ -9,6 +9,7 @@ the sweep's process is killed.
 
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -468,3 +469,179 @@ def test_status_reports_an_unreadable_failure_record_instead_of_failing(tmp_path
     captured = capsys.readouterr()
     assert "Traceback" not in captured.err
     assert f"failed   {s.runs[0].partition}: (the record {record.name} cannot be read" in captured.out
+
+
+# ---------------------------------------------------------------------------- the job-array script of `sweep plan`
+
+
+@pytest.mark.parametrize("flags, fragment", [
+    (["--time", "1:00\ntouch x"], "--time '1:00\\ntouch x' is not a SLURM time limit"),  # a command line of its own
+    (["--time", "1:00\rtouch x"], "--time '1:00\\rtouch x' is not a SLURM time limit"),
+    (["--time", "30m"], "--time '30m' is not a SLURM time limit: minutes, MM:SS, HH:MM:SS, D-HH"),
+    (["--time", "1:00 --wrap=x"], "--time '1:00 --wrap=x' is not"),
+    (["--time", "1:2:3:4"], "--time '1:2:3:4' is not"),
+    (["--partition", "a b"], "--partition 'a b' is not partition names"),
+    (["--partition", "short,"], "--partition 'short,' is not"),
+    (["--partition", "x\x00y"], "--partition 'x\\x00y' is not"),
+    (["--account", "$(id)"], "--account '$(id)' is not an account name"),
+    (["--account", "lab,other"], "--account 'lab,other' is not"),
+    (["--results", "{tmp}/new\nline"], "--results '{tmp}/new\\nline' holds the control character '\\n', which a "
+                                       "job script cannot carry safely"),
+    (["--results", "{tmp}/esc\x1b[2J"], "holds the control character '\\x1b'"),
+    (["--results", "{tmp}/not-utf8-\udcff"], "holds a byte that is not UTF-8"),
+    (["--results", "{tmp}/back\\slash"], "holds a backslash (an escape to sbatch)"),
+    (["--out", "{tmp}/x\n.sbatch"], "--out '{tmp}/x\\n.sbatch' holds the control character '\\n'"),
+])
+def test_hostile_plan_values_are_refused_before_anything_is_made(tmp_path, capsys, no_array, flags, fragment):
+    flags = [flag.format(tmp=tmp_path) for flag in flags]
+    if "--results" not in flags:
+        flags += ["--results", str(tmp_path / "results")]
+    refused(capsys, ["sweep", "plan", str(SMOKE), *flags], fragment.format(tmp=tmp_path), tmp_path)
+
+
+@pytest.mark.parametrize("time_limit", ["30", "30:00", "12:30:00", "2-12", "2-12:30", "2-12:30:00", "UNLIMITED"])
+def test_every_slurm_time_format_is_taken(tmp_path, capsys, time_limit):
+    assert cli.main(["sweep", "plan", str(SMOKE), "--results", str(tmp_path), "--time", time_limit]) == 0
+    assert f"\n#SBATCH --time={time_limit}\n" in (tmp_path / "smoke" / "smoke.sbatch").read_text()
+
+
+def test_the_job_script_keeps_hostile_paths_literal(tmp_path, monkeypatch, capsys):
+    """Paths that hold spaces, quotes, % and ``$(...)`` reach the task's command as they are:
+    bash (and sbatch, whose #SBATCH parser takes the same quotes) expands nothing."""
+    hostile = "a $(touch {}) it's `touch {}` %x"
+    here = tmp_path / hostile.format("here-ran", "here-ran")
+    (here / "sweeps").mkdir(parents=True)
+    sweep = here / "sweeps" / hostile.format("sweep-ran", "sweep-ran").replace("%x", "x.toml")
+    sweep.write_text(SMOKE.read_text())
+    results = here / hostile.format("results-ran", "results-ran")
+    monkeypatch.chdir(here)
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    assert cli.main(["sweep", "plan", str(sweep), "--results", str(results)]) == 0
+    script = results / "smoke" / "smoke.sbatch"
+    assert f"sbatch {shlex.quote(str(script))}" in capsys.readouterr().out  # a command that can be pasted
+    text = script.read_text()
+    assert subprocess.run(["bash", "-n", str(script)]).returncode == 0
+    output = [line for line in text.splitlines() if line.startswith("#SBATCH --output=")]
+    assert shlex.split(output[0].removeprefix("#SBATCH ")) == [
+        f"--output={str(results).replace('%', '%%')}/smoke/_logs/%A_%a.out"]  # %% is SLURM's literal %
+    # Run the script with its last line printing the words it would exec, instead of exec'ing them.
+    assert text.count("\nexec ") == 1
+    shown = script.with_name("shown.sh")
+    shown.write_text(text.replace("\nexec ", "\nprintf '%s\\n' \"$PWD\" \"$NUMBA_CACHE_DIR\" "))
+    done = subprocess.run(["bash", str(shown)], cwd=tmp_path, capture_output=True, text=True,
+                          env={**os.environ, "SLURM_ARRAY_TASK_ID": "1"})
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == [str(here), str(results / "_numba_cache"), sys.executable, "-m",
+                                        "dronefleet.cli", "sweep", "run", str(sweep), "--results", str(results),
+                                        "--task-id", "1"]
+    assert not list(tmp_path.rglob("*-ran")), "a command in a path was run"
+
+
+def _dataset_with_layout(root):
+    out = root / "smoke"
+    out.mkdir(parents=True)
+    (out / "_layout.json").write_text('{"keys": ["rule", "tau_minutes", "seed"]}\n')
+    return out
+
+
+def test_plan_never_replaces_a_dataset_file_a_special_file_or_a_file_it_did_not_write(tmp_path, capsys):
+    results = tmp_path / "results"
+    out = _dataset_with_layout(results)
+    (tmp_path / "notes.txt").write_text("mine")
+    os.mkfifo(tmp_path / "pipe")
+    before = snapshot(tmp_path)
+    for target, fragment in [
+        (out / "_layout.json", f"--out {str(out / '_layout.json')!r} lies inside the dataset {str(out)!r}, "
+                               f"whose files it would replace: give {str(out / 'smoke.sbatch')!r}"),
+        (out / "_logs" / "x.sbatch", "lies inside the dataset"),
+        (tmp_path / "notes.txt", f"--out {str(tmp_path / 'notes.txt')!r} exists and is not a job-array script "
+                                 "that dronefleet sweep plan wrote, so it is not replaced"),
+        (tmp_path / "pipe", f"--out {str(tmp_path / 'pipe')!r} is a named pipe (FIFO), which writing would "
+                            "replace with a regular file"),
+        (SMOKE, "exists and is not a job-array script"),
+    ]:
+        assert run_cli(["sweep", "plan", str(SMOKE), "--results", str(results), "--out", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and len(err.splitlines()) == 1 and fragment in err, err
+        assert snapshot(tmp_path) == before
+    assert (tmp_path / "pipe").is_fifo()
+    # its own scripts are written again: in the dataset, and anywhere else it wrote one
+    for target in (out / "smoke.sbatch", tmp_path / "smoke.sh"):
+        for _ in range(2):
+            assert run_cli(["sweep", "plan", str(SMOKE), "--results", str(results), "--out", str(target)]) == 0
+        assert target.read_text().startswith(sw.SCRIPT_HEAD)
+
+
+def _disk_full_after(monkeypatch, module, name, keep=100):
+    """``module.name`` (a writer whose second argument, or self, is the path) writes ``keep`` bytes
+    of its output, then fails as a full disk does."""
+    import errno
+
+    def full(*args, **kwargs):
+        path = args[1] if not isinstance(args[0], Path) else args[0]
+        Path(path).write_bytes(b"x" * keep)
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(module, name, full)
+
+
+def test_a_script_write_that_fails_is_one_line_and_leaves_nothing(tmp_path, capsys, monkeypatch):
+    out = _dataset_with_layout(tmp_path)
+    (out / "_logs").mkdir()
+    script = out / "smoke.sbatch"
+    before = snapshot(tmp_path)
+    _disk_full_after(monkeypatch, Path, "write_text")
+    assert run_cli(["sweep", "plan", str(SMOKE), "--results", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"cannot write {str(script)!r}: No space left on device" in err
+    assert snapshot(tmp_path) == before  # no script, whole or partial, and no hidden temporary
+
+
+@pytest.fixture(scope="module")
+def tiny_done(tmp_path_factory):
+    """The results root of the tiny delivery sweep, run (4 runs)."""
+    from conftest import TINY_SWEEPS
+
+    root = tmp_path_factory.mktemp("tiny")
+    (root / "tiny.toml").write_text(TINY_SWEEPS["delivery"])
+    assert cli.main(["sweep", "run", str(root / "tiny.toml"), "--results", str(root / "results"), "--jobs", "1"]) == 0
+    return root
+
+
+def test_a_collect_write_that_fails_is_one_line_and_leaves_nothing(tiny_done, capsys, monkeypatch):
+    import pyarrow.parquet as pq
+
+    out = tiny_done / "results" / "tiny"
+    before = snapshot(tiny_done)
+    _disk_full_after(monkeypatch, pq, "write_table")
+    assert run_cli(["sweep", "collect", str(tiny_done / "tiny.toml"), "--results", str(tiny_done / "results")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"cannot write {str(out / 'collected.parquet')!r}: No space left on device" in err
+    assert snapshot(tiny_done) == before
+
+
+def test_collect_never_replaces_a_special_file(tiny_done, capsys):
+    collected = tiny_done / "results" / "tiny" / "collected.parquet"
+    os.mkfifo(collected)
+    try:
+        assert run_cli(["sweep", "collect", str(tiny_done / "tiny.toml"), "--results",
+                        str(tiny_done / "results")]) == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and f"{str(collected)!r} is a named pipe (FIFO)" in err, err
+        assert collected.is_fifo()
+    finally:
+        collected.unlink()
+
+
+def test_a_layout_write_that_fails_is_one_line(tmp_path, capsys, monkeypatch, no_array):
+    import errno
+
+    def full(sweep, out):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(sw, "_record_layout", full)
+    monkeypatch.setattr(sw, "execute", lambda run, out: pytest.fail("a run ran"))
+    assert run_cli(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--jobs", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"cannot write {str(tmp_path / 'smoke' / '_layout.json')!r}: No space left on device" in err

@@ -3,6 +3,7 @@ bad input in one line, and it plays in a real browser (headless Chromium) withou
 
 import importlib
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -305,3 +306,11 @@ def test_the_counters_at_the_end_are_the_runs_totals(delivery_run, replenishment
     trials = pq.read_table(replenishment_run / "summary.parquet").to_pandas().set_index("trial")
     shown = counters(chromium(replenishment_run / REPLAY_FILE, "t=90", ["--dump-dom"], tmp_path / "profile"))
     assert shown["work [points]"] == f"{trials.loc[3, 'work']:,}"
+
+
+def test_a_special_file_at_out_is_refused_not_replaced(tmp_path, capsys, delivery_run):
+    pipe = tmp_path / "page.html"
+    os.mkfifo(pipe)
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(pipe)],
+             f"--out {str(pipe)!r} is a named pipe (FIFO), which writing would replace with a regular file")
+    assert pipe.is_fifo() and [p.name for p in tmp_path.iterdir()] == ["page.html"]

@@ -282,3 +282,23 @@ def test_an_out_that_is_a_file_is_refused_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err == f"dronefleet: error: --out {str(taken)!r} is a file: give the folder to write the results under\n"
     assert taken.read_text() == "mine\n"
+
+
+@pytest.mark.parametrize("failing", ["table", "drawing"])
+def test_a_write_that_fails_is_one_line_and_leaves_no_part_of_its_file(tmp_path, capsys, monkeypatch, failing):
+    import errno
+
+    import matplotlib.figure
+    import pyarrow.parquet as pq
+
+    def full(writer, path, *args, **kwargs):  # pq.write_table(table, path), Figure.savefig(self, path)
+        Path(path).write_bytes(b"x" * 100)
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(*((pq, "write_table") if failing == "table" else (matplotlib.figure.Figure, "savefig")),
+                        full)
+    assert cli.main(["reproduce", "fig09", "--quick", "--jobs", "1", "--out", str(tmp_path)]) == 2
+    folder = tmp_path / "quick" / "fig09"
+    named = folder / "runs.parquet" if failing == "table" else folder  # a figure is several files
+    assert capsys.readouterr().err == f"dronefleet: error: cannot write {str(named)!r}: No space left on device\n"
+    left = sorted(p.name for p in folder.iterdir())
+    assert left == ([] if failing == "table" else ["bounds.parquet", "runs.parquet"])  # no hidden temporary

@@ -108,6 +108,10 @@ def _save_fleet_exists(root):
     (root / "fleet.parquet").write_bytes(b"an older fleet")
 
 
+def _save_fleet_fifo(root):
+    os.mkfifo(root / "fleet.parquet")
+
+
 HOSTILE = [  # (what is already there, run arguments, message fragment)
     (_file, ["--out", "{root}/a-file"], "is a file; it must be a folder"),
     (_file, ["--out", "{root}/a-file/run"], "Not a directory"),
@@ -119,6 +123,9 @@ HOSTILE = [  # (what is already there, run arguments, message fragment)
     (_save_fleet_folder, ["--out", "{root}/run", "--save-fleet", "{root}/fleet.parquet"], "is a folder"),
     (_save_fleet_exists, ["--out", "{root}/run", "--save-fleet", "{root}/fleet.parquet"],
      "exists; pass --overwrite to replace it or choose another --save-fleet"),
+    # --overwrite replaces a fleet file, never a special one with a regular file
+    (_save_fleet_fifo, ["--out", "{root}/run", "--save-fleet", "{root}/fleet.parquet", "--overwrite"],
+     "--save-fleet '{root}/fleet.parquet' is a named pipe (FIFO), which writing would replace with a regular file"),
     (None, ["--out", ".."], "must name a folder of its own"),
     (None, ["--out", "/"], "must name a folder of its own"),
 ]
@@ -130,7 +137,7 @@ def test_unusable_outputs_are_refused_before_any_work(tmp_path, capsys, no_simul
         prepare(tmp_path)
     before = _tree(tmp_path)
     code, out, err = _run([*SHORT, *(a.format(root=tmp_path) for a in argv)], capsys)
-    _assert_refused(code, err, fragment)
+    _assert_refused(code, err, fragment.format(root=tmp_path))
     assert out == ""
     assert _tree(tmp_path) == before
 

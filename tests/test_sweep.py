@@ -203,7 +203,7 @@ def test_plan_writes_a_job_array_script(tmp_path, monkeypatch, capsys):
                       "#SBATCH --partition=short", "#SBATCH --account=lab"]
     assert (results / "smoke" / "_logs").is_dir()  # SLURM does not create it
     assert f"\ncd {tmp_path}\n" in text
-    assert f'export NUMBA_CACHE_DIR="${{NUMBA_CACHE_DIR:-{results}/_numba_cache}}"' in text
+    assert f'NUMBA_CACHE_DIR={results}/_numba_cache; fi\nexport NUMBA_CACHE_DIR\n' in text
     assert text.rstrip().endswith(f"exec {sys.executable} -m dronefleet.cli sweep run {SMOKE} "
                                   f"--results {results} --task-id \"$SLURM_ARRAY_TASK_ID\"")
     out = tmp_path / "elsewhere.sh"

@@ -103,3 +103,17 @@ def test_a_replenishment_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_
     files = table_files(local, tables)
     assert table_files(on_slurm, tables) == files
     assert len(files) == len(tables) * 4
+
+
+def test_a_hostile_results_path_reaches_the_tasks_as_it_is(slurm, tmp_path, monkeypatch):
+    """Spaces, quotes, % and $(...) in --results: sbatch reads the quoted #SBATCH --output as one
+    path (%% its literal %), bash expands nothing, and the tasks write the dataset there."""
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY_SWEEPS["delivery"])
+    results = tmp_path / "r $(touch ran) it's %x"
+    assert cli.main(["sweep", "plan", str(path), "--results", str(results)]) == 0
+    logs, printed = submit(slurm, results / "tiny")
+    assert len(logs) == 2 and printed.count("ran 2, skipped 0") == 2
+    assert cli.main(["sweep", "status", str(path), "--results", str(results)]) == 0
+    assert not list(tmp_path.rglob("ran")), "a command in the path was run"

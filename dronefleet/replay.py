@@ -18,8 +18,9 @@ from typing import Any
 
 from . import scenarios
 from .config import SCENARIO_KEY, ConfigError
+from .datafiles import DataError, parquet_schema
 from .outputs import writing
-from .records import CONFIG_KEY, REPLAY_FILE, run_dir_state, write_atomic
+from .records import CONFIG_KEY, REPLAY_FILE, read_config_dict, run_dir_state, write_atomic
 
 __all__ = ["scenario_of_run", "page", "write"]
 
@@ -28,11 +29,9 @@ TEMPLATE = "replay.html"  # in this package: the page around the data and the sc
 
 def _config_text(table_path: Path) -> bytes | None:
     """The config a run's table carries (JSON bytes), or None: absent, not parquet, cut short."""
-    import pyarrow.parquet as pq
-
     try:
-        return pq.read_schema(table_path).metadata[CONFIG_KEY]
-    except (OSError, KeyError, TypeError, ValueError):  # ArrowInvalid is a ValueError
+        return (parquet_schema(table_path).metadata or {}).get(CONFIG_KEY)
+    except DataError:
         return None
 
 
@@ -42,19 +41,17 @@ def scenario_of_run(run_dir: str | os.PathLike) -> scenarios.Scenario:
     if not run_dir.is_dir():
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is {'a file' if run_dir.exists() else 'missing'}; "
                           "give a folder that dronefleet run wrote")
-    text = _config_text(run_dir / "summary.parquet")
     try:
-        config = json.loads(text)
-    except (TypeError, ValueError):
-        config = None
-    if not isinstance(config, dict):  # no config, or JSON that is no config
+        config = read_config_dict(run_dir / "summary.parquet")
+    except DataError:  # no config, or JSON that is no config
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a run folder: it has no summary.parquet "
-                          "written by dronefleet run")
+                          "written by dronefleet run") from None
     scenario = scenarios.get(config.get(SCENARIO_KEY, "delivery"), f"RUN_DIR {str(run_dir)!r}: ")
     if run_dir_state(run_dir, scenario.tables) != "complete":
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a complete {scenario.name} run folder: it must "
                           f"hold exactly {', '.join(f'{name}.parquet' for name in scenario.tables)}")
     # every table of a run carries its config: a table of another run (or cut short) has another or none
+    text = _config_text(run_dir / "summary.parquet")
     strays = [f"{name}.parquet" for name in scenario.tables if _config_text(run_dir / f"{name}.parquet") != text]
     if strays:
         raise ConfigError(f"RUN_DIR {str(run_dir)!r}: {', '.join(strays)} not of the run in summary.parquet "

@@ -12,6 +12,7 @@ slider, the counters, an overview chart and ``#t=SECONDS`` (open paused at that 
 import json
 import math
 import os
+import re
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -70,12 +71,20 @@ def _json_ready(value):
     return value
 
 
+#: Characters of the embedded JSON written as \uXXXX escapes (the same string to JSON): with
+#: no ``<`` nothing in the data can open a comment (``<!--``, which would make the parser
+#: look past ``</script>``), open or close a script element; ``>`` and ``&`` for good
+#: measure; U+2028/9 end a line in old JavaScript parsers.
+_SCRIPT_SAFE = str.maketrans({char: f"\\u{ord(char):04x}" for char in "<>&\u2028\u2029"})
+
+
 def page(data: dict[str, Any], scene_script: str) -> str:
     """The HTML page of ``data`` (a scenario's ``replay_data``) drawn by ``scene_script``."""
     template = resources.files(__package__).joinpath(TEMPLATE).read_text(encoding="utf-8")
-    # "</" inside the script elements would end them early; JSON may write it as "<\/"
-    embedded = json.dumps(_json_ready(data), allow_nan=False, separators=(",", ":")).replace("</", "<\\/")
-    return template.replace("/*DATA*/", embedded, 1).replace("/*SCENE*/", scene_script, 1)
+    embedded = json.dumps(_json_ready(data), allow_nan=False, separators=(",", ":")).translate(_SCRIPT_SAFE)
+    parts = {"/*DATA*/": embedded, "/*SCENE*/": scene_script}
+    # one pass: a placeholder's text inside the data (a config string) is never filled in
+    return re.sub(r"/\*(?:DATA|SCENE)\*/", lambda match: parts.pop(match[0], match[0]), template)
 
 
 def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:

@@ -153,6 +153,19 @@ def test_script_ends_in_the_data_are_escaped(tmp_path):
     assert json.loads(data)["title"] == "</script><b>"
 
 
+#: Text that would break out of (or never close) the data's script element, or fill in a placeholder.
+HOSTILE_TEXT = "<!--<script></script><b>&amp;\u2028\u2029 /*SCENE*/ /*DATA*/ -->"
+
+
+def test_no_text_in_the_data_can_open_a_comment_or_a_script(tmp_path):
+    html = replay.page({"title": HOSTILE_TEXT, "duration_s": 1.0}, "function makeScene() {}")
+    data = re.search(r'id="run-data">(.*?)</script>', html, re.S)[1]
+    assert json.loads(data)["title"] == HOSTILE_TEXT
+    for opening in ("<!--", "<script", "</script", "\u2028", "\u2029", "/*SCENE*/"):
+        assert opening not in data.lower()
+    assert html.count("function makeScene() {}") == 1
+
+
 def _refused(capsys, argv, fragment):
     assert cli.main(argv) == 2
     err = capsys.readouterr().err
@@ -291,6 +304,16 @@ def test_the_page_plays_in_chromium_without_errors(run, times, request, tmp_path
     assert shots[0] != shots[1]
     dom = chromium(page, f"t={times[1]}", ["--dump-dom"], tmp_path / "profile")
     assert f'data-rendered="{times[1]}"' in dom  # the player ran to the end and drew that time
+
+
+@needs_chromium
+def test_the_page_plays_whatever_text_its_data_holds(delivery_run, tmp_path):
+    data = delivery_data(delivery_run)
+    data["title"] = HOSTILE_TEXT  # a config string, say, shown in the title
+    page = tmp_path / "page.html"
+    page.write_text(replay.page(data, replay.scenario_of_run(delivery_run).replay_script))
+    dom = chromium(page, "t=3000", ["--dump-dom"], tmp_path / "profile")
+    assert 'data-rendered="3000"' in dom  # the player started and drew that time
 
 
 @needs_chromium

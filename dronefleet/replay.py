@@ -91,11 +91,10 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
     """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
-    table that is another run's or cannot be read, or if ``out`` cannot be written (a folder, a missing or
+    table that is another run's, cannot be read or holds a value the page cannot draw (a
+    DataError naming the file and column), or if ``out`` cannot be written (a folder, a missing or
     read-only parent, a file in a run folder other than ``run_dir``'s own ``replay.html``, ...).
     """
-    import pyarrow as pa
-
     run_dir, out = Path(run_dir), Path(out)
     scenario = scenario_of_run(run_dir)
     if out.is_dir():
@@ -109,12 +108,7 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
                             for s in scenarios.SCENARIOS.values()):
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
-    try:
-        data = scenario.replay_data(run_dir)
-    except (OSError, pa.ArrowException) as error:  # a table whose data (not its footer) is corrupt
-        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-        raise ConfigError(f"RUN_DIR {str(run_dir)!r} holds a table that cannot be read as a {scenario.name} "
-                          f"run's ({first}); write the run again with dronefleet run") from None
-    html = page(data, scenario.replay_script)
+    # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it
+    html = page(scenario.replay_data(run_dir), scenario.replay_script)
     with writing(out):
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))

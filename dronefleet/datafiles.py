@@ -19,10 +19,14 @@ from __future__ import annotations
 import json
 import os
 import stat
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
 from .config import ConfigError, _show
+
+if TYPE_CHECKING:
+    import numpy
+    import pyarrow
 
 __all__ = ["DataError", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_TABLE_BYTES", "checked_column", "parse_json",
            "parquet_rows", "parquet_schema", "read_bytes", "read_json", "read_parquet"]
@@ -165,8 +169,8 @@ def read_parquet(path: str | os.PathLike, columns: Mapping[str, Any], kind: str 
         raise DataError(f"{kind} {str(path)!r} is damaged ({_first_line(e)})") from None
 
 
-def checked_column(table, name: str, path: str | os.PathLike, ok, allowed: str, kind: str = "table",
-                   nullable: bool = False):
+def checked_column(table: pyarrow.Table, name: str, path: str | os.PathLike, ok: Callable[[Any], Any], allowed: str,
+                   kind: str = "table", nullable: bool = False) -> numpy.ndarray:
     """Column ``name`` of ``table`` (as :func:`read_parquet` read it from ``path``) as a numpy
     array of shape (rows,), after checking every value.
 

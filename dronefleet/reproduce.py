@@ -229,7 +229,7 @@ def _is_number(arrow_type):
     return pa.types.is_integer(arrow_type) or pa.types.is_floating(arrow_type)
 
 
-def flat(arrow_type):
+def flat(arrow_type: pa.DataType) -> bool:
     """Any column type but a nested one (a list, struct or map): every value compares as one value."""
     return not pa.types.is_nested(arrow_type)
 

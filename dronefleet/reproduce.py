@@ -273,6 +273,10 @@ REPLENISHMENT_TABLE_COLUMNS = {
 }
 
 
+#: Columns whose values name at most one row of a table (a heatmap cell: its SoC, mass and distance).
+UNIQUE_KEYS = {"winner_soh": ("soc", "mass_kg", "distance_m")}
+
+
 def _read_parquet(path, figure, name):
     """The table ``name`` of ``figure`` at ``path``, every column of :data:`TABLE_COLUMNS` checked
     value by value; a file that is not parquet (corrupt, cut short), lacks a column or holds a value
@@ -284,8 +288,17 @@ def _read_parquet(path, figure, name):
         kinds = {column: KINDS[columns[column]] if column in columns else (flat, _any, "", True)
                  for column in [*columns, *(c for c in schema.names if c not in columns)]}
         table = read_parquet(path, {column: kind[0] for column, kind in kinds.items()})
-        return pd.DataFrame({column: checked_column(table, column, path, ok, allowed, nullable=nullable)
-                             for column, (_, ok, allowed, nullable) in kinds.items()})
+        if table.num_rows == 0:  # every figure draws at least one run, and --check compares one
+            raise DataError(f"table {str(path)!r} holds no rows")
+        frame = pd.DataFrame({column: checked_column(table, column, path, ok, allowed, nullable=nullable)
+                              for column, (_, ok, allowed, nullable) in kinds.items()})
+        keys = list(UNIQUE_KEYS.get(name, ()))
+        repeated = frame.duplicated(keys) if keys else None
+        if repeated is not None and repeated.any():
+            row = int(repeated.to_numpy().argmax())
+            raise DataError(f"table {str(path)!r}: row {row} repeats {', '.join(keys)} = "
+                            f"{', '.join(f'{value:g}' for value in frame.loc[row, keys])} of an earlier row")
+        return frame
     except DataError as error:
         raise SweepError(f"{error}: {again}") from None
 

@@ -286,6 +286,18 @@ def test_a_run_too_large_to_play_is_refused_in_one_line_before_its_tables_are_re
     assert not (tmp_path / "page.html").exists()
 
 
+@pytest.mark.parametrize("table, limit, what", [("orders", "MAX_ORDERS", "orders"),
+                                                 ("timeseries", "MAX_SAMPLES", "time-series samples")])
+def test_a_table_too_long_to_read_is_refused_in_one_line_before_it_is_read(table, limit, what, tmp_path, capsys,
+                                                                           delivery_run, monkeypatch):
+    rows = pq.ParquetFile(delivery_run / f"{table}.parquet").metadata.num_rows
+    monkeypatch.setattr(delivery_replay, limit, rows - 1)
+    monkeypatch.setattr(pq, "read_table", lambda *a, **k: pytest.fail("a table was read"))
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "page.html")],
+             f"has {rows:,} {what} in {table}.parquet; a replay page reads at most {rows - 1:,}")
+    assert not (tmp_path / "page.html").exists()
+
+
 def test_run_replay_of_a_run_too_large_to_play_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(delivery_replay, "MAX_FLIGHTS", 100)  # 0.1 weeks at tau 15 min: ~67 orders
     _refused(capsys, ["run", "--set", "horizon_weeks=0.3", "--out", str(tmp_path / "run"), "--replay"],

@@ -20,7 +20,7 @@ from ..config import ConfigError
 from ..datafiles import checked_column, parquet_rows, read_parquet
 from .config import SECONDS_PER_WEEK, Config
 
-__all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS"]
+__all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS", "MAX_ORDERS", "MAX_SAMPLES"]
 
 #: Bearing step between consecutive order ids [rad]: successive orders never line up.
 GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
@@ -28,6 +28,10 @@ OUTCOMES = ("delivered", "aborted", "lost", "in_flight")
 #: At most this many attempts in a page (~90 bytes each: a page of ~90 MB, built in a few GB
 #: of memory); the paper's 8-week run has ~6,000, the largest run allowed ~10^7.
 MAX_FLIGHTS = 1_000_000
+#: At most this many orders and time-series samples are read for a page (``--replay`` refuses
+#: runs expecting more than MAX_FLIGHTS orders): a tampered table is refused before it is read.
+MAX_ORDERS = 2 * MAX_FLIGHTS
+MAX_SAMPLES = 10_000_001  # RUN_LIMITS["samples"] + 1
 
 
 def _rounded(values, decimals):
@@ -113,6 +117,11 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
     if flights > MAX_FLIGHTS:  # before the tables are read: the page would not fit in memory, nor play
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} has {flights:,} attempts; a replay page draws at most "
                           f"{MAX_FLIGHTS:,}: replay a shorter run (horizon_weeks) or one of fewer orders")
+    for table, limit, what in (("orders", MAX_ORDERS, "orders"), ("timeseries", MAX_SAMPLES, "time-series samples")):
+        rows = parquet_rows(run_dir / f"{table}.parquet")
+        if rows > limit:
+            raise ConfigError(f"RUN_DIR {str(run_dir)!r} has {rows:,} {what} in {table}.parquet; a replay page "
+                              f"reads at most {limit:,}: replay a shorter run (horizon_weeks)")
     orders, attempts, series = _checked_tables(run_dir, config)
     horizon, speed = config.horizon_s, config.speed_m_s
 

@@ -24,8 +24,7 @@ from dronefleet.config import ConfigError
 from dronefleet.records import CONFIG_KEY, REPLAY_FILE
 
 SETTINGS = settings(max_examples=100, deadline=None, derandomize=True, database=None,
-                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                           HealthCheck.function_scoped_fixture])
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 DELIVERY_TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 REPLENISHMENT_TABLES = ("summary", "timeseries")
 

@@ -4,14 +4,15 @@ never hangs, exhausts memory or runs code.
 
 * :func:`read_bytes`: a regular file (not a pipe, device or folder) of at most ``limit`` bytes;
 * :func:`parse_json`, :func:`read_json`: JSON nested at most :data:`MAX_JSON_DEPTH` deep;
-* :func:`parquet_schema`, :func:`read_parquet`: a parquet file whose footer can be read and whose
-  columns have the names and types expected, read whole (so a truncated or garbled file is found
-  before any of it is used); :func:`check_columns`, the columns of a schema read from a footer
-  alone (where reading every file whole would cost too much).
+* :func:`parquet_schema`, :func:`parquet_rows`, :func:`read_parquet`: a parquet file whose footer
+  can be read and whose columns have the names and types expected, read whole (so a truncated or
+  garbled file is found before any of it is used); :func:`check_columns`, the columns of a schema
+  read from a footer alone (where reading every file whole would cost too much);
+* :func:`checked_column`: a column read so, every value checked (nulls, range, codes) before use.
 
 Every refusal is a :class:`DataError` (a :class:`~dronefleet.config.ConfigError`: one line,
 exit code 2) naming the file. What a value must be beyond its type (a range, a code) is the
-reader's to check: the scenario knows it.
+reader's to say: the scenario knows it; :func:`checked_column` checks it.
 """
 
 from __future__ import annotations
@@ -19,13 +20,17 @@ from __future__ import annotations
 import json
 import os
 import stat
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
-from .config import ConfigError
+from .config import ConfigError, _show
 
-__all__ = ["DataError", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_TABLE_BYTES", "check_columns", "parse_json",
-           "parquet_schema", "read_bytes", "read_json", "read_parquet"]
+if TYPE_CHECKING:
+    import numpy
+    import pyarrow
+
+__all__ = ["DataError", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "MAX_TABLE_BYTES", "check_columns", "checked_column",
+           "parse_json", "parquet_rows", "parquet_schema", "read_bytes", "read_json", "read_parquet"]
 
 #: Largest JSON side file read [bytes] (a sweep's layout, a failed run's record: a few KB).
 MAX_JSON_BYTES = 1_000_000
@@ -123,6 +128,19 @@ def parquet_schema(path: str | os.PathLike, kind: str = "table", limit: int = MA
         raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({_first_line(e)})") from None
 
 
+def parquet_rows(path: str | os.PathLike, kind: str = "table", limit: int = MAX_TABLE_BYTES) -> int:
+    """How many rows the parquet file ``path`` holds, read from its footer alone (before reading a
+    table too large to use); DataError as :func:`parquet_schema`."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    _regular(path, kind, limit)
+    try:
+        return pq.ParquetFile(path).metadata.num_rows
+    except (pa.ArrowException, OSError, ValueError) as e:
+        raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({_first_line(e)})") from None
+
+
 def check_columns(schema, columns: Mapping[str, Any], path: str | os.PathLike, kind: str = "table",
                   exact: bool = False) -> None:
     """Refuse (DataError naming the file and the first column at fault) a parquet ``schema`` (of
@@ -167,3 +185,28 @@ def read_parquet(path: str | os.PathLike, columns: Mapping[str, Any], kind: str 
         return pq.read_table(path, columns=list(columns))
     except (pa.ArrowException, OSError, ValueError) as e:
         raise DataError(f"{kind} {str(path)!r} is damaged ({_first_line(e)})") from None
+
+
+def checked_column(table: pyarrow.Table, name: str, path: str | os.PathLike, ok: Callable[[Any], Any], allowed: str,
+                   kind: str = "table", nullable: bool = False) -> numpy.ndarray:
+    """Column ``name`` of ``table`` (as :func:`read_parquet` read it from ``path``) as a numpy
+    array of shape (rows,), after checking every value.
+
+    ``ok`` maps the array to a bool array, True where a value is allowed (a float column holds
+    NaN at its nulls; a string column, objects); ``allowed`` says what is, for the message.
+    Nulls are refused unless ``nullable``. DataError naming the file, the column, the first row
+    at fault and its value otherwise.
+    """
+    import numpy as np
+
+    column = table[name]
+    null = column.is_null().to_numpy(zero_copy_only=False)
+    values = column.to_numpy(zero_copy_only=False)
+    with np.errstate(invalid="ignore", over="ignore"):
+        good = null if nullable else np.zeros(len(values), dtype=bool)
+        good = good | (~null & np.asarray(ok(values), dtype=bool))
+    if good.all():
+        return values
+    row = int(np.argmin(good))
+    value = "null" if null[row] else _show(values[row].item() if isinstance(values[row], np.generic) else values[row])
+    raise DataError(f"{kind} {str(path)!r}: column {name!r} holds {value} at row {row}; allowed: {allowed}")

@@ -9,7 +9,6 @@ A scenario's own tables are built in its subpackage (delivery: :mod:`dronefleet.
 """
 
 import errno
-import json
 import os
 import re
 import shutil
@@ -194,6 +193,37 @@ def write_tables(named_tables: Mapping[str, pa.Table], out_dir: str | os.PathLik
     return paths
 
 
-def read_config_dict(path: str | os.PathLike) -> dict[str, Any]:
-    """The resolved config embedded in a dronefleet parquet file, as the dict of its JSON."""
-    return json.loads(pq.read_schema(path).metadata[CONFIG_KEY])
+def read_config_dict(path: str | os.PathLike, kind: str = "table") -> dict[str, Any]:
+    """The resolved config embedded in a dronefleet parquet file, as the dict of its JSON.
+
+    DataError naming the file (the ``kind`` of file it is) if it is not a readable parquet file,
+    holds no config, or holds one that is not JSON (nested at most
+    :data:`dronefleet.datafiles.MAX_JSON_DEPTH` deep) of an object.
+    """
+    from .datafiles import DataError, parquet_schema, parse_json
+
+    where = f"{kind} {str(path)!r}"
+    text = (parquet_schema(path, kind).metadata or {}).get(CONFIG_KEY)
+    if text is None:
+        raise DataError(f"{where} holds no dronefleet config in its metadata: it was not written by dronefleet")
+    document = parse_json(text, f"the config in {where}")
+    if not isinstance(document, dict):
+        raise DataError(f"the config in {where} is a JSON {type(document).__name__}, not an object of sections")
+    return document
+
+
+def read_config(path: str | os.PathLike, build: Callable[[dict[str, Any]], Any], kind: str = "table") -> Any:
+    """The config embedded in a dronefleet parquet file, made by ``build`` (a scenario's
+    ``config_from_dict``, which must not trust it: files are data) from :func:`read_config_dict`.
+
+    DataError naming the file if it holds no config, or one that ``build`` refuses (the
+    refusal's ConfigError follows the file's name).
+    """
+    from .config import ConfigError
+    from .datafiles import DataError
+
+    document = read_config_dict(path, kind)
+    try:
+        return build(document)
+    except ConfigError as error:
+        raise DataError(f"{kind} {str(path)!r} holds a config that is not valid: {error}", error.keys) from None

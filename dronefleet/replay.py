@@ -12,14 +12,16 @@ slider, the counters, an overview chart and ``#t=SECONDS`` (open paused at that 
 import json
 import math
 import os
+import re
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from . import scenarios
 from .config import SCENARIO_KEY, ConfigError
+from .datafiles import DataError, parquet_schema
 from .outputs import check_output_file, writing
-from .records import CONFIG_KEY, REPLAY_FILE, run_dir_state, write_atomic
+from .records import CONFIG_KEY, REPLAY_FILE, read_config_dict, run_dir_state, write_atomic
 
 __all__ = ["scenario_of_run", "page", "write"]
 
@@ -28,11 +30,9 @@ TEMPLATE = "replay.html"  # in this package: the page around the data and the sc
 
 def _config_text(table_path: Path) -> bytes | None:
     """The config a run's table carries (JSON bytes), or None: absent, not parquet, cut short."""
-    import pyarrow.parquet as pq
-
     try:
-        return pq.read_schema(table_path).metadata[CONFIG_KEY]
-    except (OSError, KeyError, TypeError, ValueError):  # ArrowInvalid is a ValueError
+        return (parquet_schema(table_path).metadata or {}).get(CONFIG_KEY)
+    except DataError:
         return None
 
 
@@ -42,19 +42,17 @@ def scenario_of_run(run_dir: str | os.PathLike) -> scenarios.Scenario:
     if not run_dir.is_dir():
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is {'a file' if run_dir.exists() else 'missing'}; "
                           "give a folder that dronefleet run wrote")
-    text = _config_text(run_dir / "summary.parquet")
     try:
-        config = json.loads(text)
-    except (TypeError, ValueError):
-        config = None
-    if not isinstance(config, dict):  # no config, or JSON that is no config
+        config = read_config_dict(run_dir / "summary.parquet")
+    except DataError:  # no config, or JSON that is no config
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a run folder: it has no summary.parquet "
-                          "written by dronefleet run")
+                          "written by dronefleet run") from None
     scenario = scenarios.get(config.get(SCENARIO_KEY, "delivery"), f"RUN_DIR {str(run_dir)!r}: ")
     if run_dir_state(run_dir, scenario.tables) != "complete":
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} is not a complete {scenario.name} run folder: it must "
                           f"hold exactly {', '.join(f'{name}.parquet' for name in scenario.tables)}")
     # every table of a run carries its config: a table of another run (or cut short) has another or none
+    text = _config_text(run_dir / "summary.parquet")
     strays = [f"{name}.parquet" for name in scenario.tables if _config_text(run_dir / f"{name}.parquet") != text]
     if strays:
         raise ConfigError(f"RUN_DIR {str(run_dir)!r}: {', '.join(strays)} not of the run in summary.parquet "
@@ -73,24 +71,31 @@ def _json_ready(value):
     return value
 
 
+#: Characters of the embedded JSON written as \uXXXX escapes (the same string to JSON): with
+#: no ``<`` nothing in the data can open a comment (``<!--``, which would make the parser
+#: look past ``</script>``), open or close a script element; ``>`` and ``&`` for good
+#: measure; U+2028/9 end a line in old JavaScript parsers.
+_SCRIPT_SAFE = str.maketrans({char: f"\\u{ord(char):04x}" for char in "<>&\u2028\u2029"})
+
+
 def page(data: dict[str, Any], scene_script: str) -> str:
     """The HTML page of ``data`` (a scenario's ``replay_data``) drawn by ``scene_script``."""
     template = resources.files(__package__).joinpath(TEMPLATE).read_text(encoding="utf-8")
-    # "</" inside the script elements would end them early; JSON may write it as "<\/"
-    embedded = json.dumps(_json_ready(data), allow_nan=False, separators=(",", ":")).replace("</", "<\\/")
-    return template.replace("/*DATA*/", embedded, 1).replace("/*SCENE*/", scene_script, 1)
+    embedded = json.dumps(_json_ready(data), allow_nan=False, separators=(",", ":")).translate(_SCRIPT_SAFE)
+    parts = {"/*DATA*/": embedded, "/*SCENE*/": scene_script}
+    # one pass: a placeholder's text inside the data (a config string) is never filled in
+    return re.sub(r"/\*(?:DATA|SCENE)\*/", lambda match: parts.pop(match[0], match[0]), template)
 
 
 def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
     """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
-    table that is another run's or cannot be read, or if ``out`` cannot be written (a folder, a special
-    file such as a named pipe or a device, a missing or read-only parent, a file in a run folder other
-    than ``run_dir``'s own ``replay.html``, ...).
+    table that is another run's, cannot be read or holds a value the page cannot draw (a
+    DataError naming the file and column), or if ``out`` cannot be written (a folder, a special
+    file such as a named pipe or a device, a missing or read-only parent, a file in a run folder
+    other than ``run_dir``'s own ``replay.html``, ...).
     """
-    import pyarrow as pa
-
     run_dir, out = Path(run_dir), Path(out)
     scenario = scenario_of_run(run_dir)
     if out.is_dir():
@@ -105,12 +110,7 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
                             for s in scenarios.SCENARIOS.values()):
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
-    try:
-        data = scenario.replay_data(run_dir)
-    except (OSError, pa.ArrowException) as error:  # a table whose data (not its footer) is corrupt
-        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
-        raise ConfigError(f"RUN_DIR {str(run_dir)!r} holds a table that cannot be read as a {scenario.name} "
-                          f"run's ({first}); write the run again with dronefleet run") from None
-    html = page(data, scenario.replay_script)
+    # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it
+    html = page(scenario.replay_data(run_dir), scenario.replay_script)
     with writing(out):
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))

@@ -49,11 +49,13 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
 from .config import shipped_config
+from .datafiles import DataError, checked_column, parquet_schema, read_parquet
 from .delivery import analysis
 from .outputs import probe_folders, writing
 from .replenishment import study as replenishment
@@ -218,17 +220,89 @@ def _read(study, figure, name):
     if not path.exists():
         raise SweepError(f"{path} is missing: run dronefleet reproduce {figure} without --redraw first, "
                          "or redraw where its tables are (--out DIR; the committed ones: --update-results)")
-    return _read_parquet(path, figure)
+    return _read_parquet(path, figure, name)
 
 
-def _read_parquet(path, figure):
-    """The table ``path`` of ``figure``; a file that is not parquet (corrupt, cut short) is one SweepError line."""
+def _is_text(arrow_type):
+    return pa.types.is_string(arrow_type) or pa.types.is_large_string(arrow_type)
+
+
+def _is_number(arrow_type):
+    return pa.types.is_integer(arrow_type) or pa.types.is_floating(arrow_type)
+
+
+def flat(arrow_type: pa.DataType) -> bool:
+    """Any column type but a nested one (a list, struct or map): every value compares as one value."""
+    return not pa.types.is_nested(arrow_type)
+
+
+def _any(values):
+    return np.full(len(values), True)
+
+
+#: What the drawings and --check rely on in a column of the figures' tables: (its arrow type,
+#: what each value must be, in words, and whether nulls are allowed).
+KINDS = {
+    "text": (_is_text, _any, "text", False),
+    "integer": (pa.types.is_integer, _any, "an integer", False),
+    "count": (pa.types.is_integer, lambda x: x >= 0, "an integer >= 0", False),
+    "key": (_is_number, np.isfinite, "a finite number", False),
+    "number": (_is_number, lambda x: ~np.isinf(x), "a number, NaN or null (not infinite)", True),
+    "flag": (pa.types.is_boolean, _any, "true or false", False),
+}
+_REPLENISHMENT_CONFIG = {**dict.fromkeys(replenishment.CONFIG_COLUMNS, "key"), "strategy": "text",
+                         "n_workers": "integer", "n_chargers": "integer", "ticks": "integer"}
+#: The columns each figure table must hold, and their kinds (:data:`KINDS`); other columns are kept
+#: if they are not nested. ``runs`` of the delivery figures is read by --check only.
+TABLE_COLUMNS = {
+    "outcomes": {"rule": "text", "tau_minutes": "key", "delivered": "count", "median_delivery_time_s": "number",
+                 "aborted_pct": "number"},
+    "backlog": {"rule": "text", "tau_minutes": "key", "arrival_week": "integer", "backlog_age_s": "number"},
+    "accuracy": {"rule": "text", "week": "integer", "mean_accuracy": "number", "ci_low": "number",
+                 "ci_high": "number", "confidence": "key"},
+    "winner_soh": {"soc": "key", "distance_m": "key", "mass_kg": "key", "mean_winner_soh": "number"},
+    "thresholds": {"theta": "key", "runs": "count", "delivered_mean": "number", "delivered_median": "number",
+                   "median_delivery_time_s": "number", "aborted_pct_mean": "number", "pending_mean": "number",
+                   "backlog_age_s_mean": "number", "best": "flag"},
+    "pending": {"rule": "text", "seed": "integer", "arrival_week": "integer", "pending": "count"},
+    "runs": {"sweep": "text", "run": "text"},
+}
+#: The replenishment figures' tables (Figures 9-12).
+REPLENISHMENT_TABLE_COLUMNS = {
+    "runs": {**_REPLENISHMENT_CONFIG, "trial": "count", "seed": "integer",
+             **dict.fromkeys(replenishment.METRIC_COLUMNS, "number")},
+    "bounds": {**_REPLENISHMENT_CONFIG, "bound_work": "number", "bound_efficiency": "number", "bound_duty": "number"},
+}
+
+
+#: Columns whose values name at most one row of a table (a heatmap cell: its SoC, mass and distance).
+UNIQUE_KEYS = {"winner_soh": ("soc", "mass_kg", "distance_m")}
+
+
+def _read_parquet(path, figure, name):
+    """The table ``name`` of ``figure`` at ``path``, every column of :data:`TABLE_COLUMNS` checked
+    value by value; a file that is not parquet (corrupt, cut short), lacks a column or holds a value
+    the figure cannot use is one line naming the file and the column."""
+    columns = (REPLENISHMENT_TABLE_COLUMNS if figure in REPLENISHMENT_FIGURES else TABLE_COLUMNS)[name]
+    again = f"run dronefleet reproduce {figure} without --check or --redraw to write it again"
     try:
-        return pd.read_parquet(path)
-    except (OSError, ValueError, pa.ArrowException) as error:  # ArrowInvalid is a ValueError
-        first = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise SweepError(f"{path} cannot be read as a parquet table ({first}): run dronefleet reproduce "
-                         f"{figure} without --check or --redraw to write it again") from None
+        schema = parquet_schema(path)
+        kinds = {column: KINDS[columns[column]] if column in columns else (flat, _any, "", True)
+                 for column in [*columns, *(c for c in schema.names if c not in columns)]}
+        table = read_parquet(path, {column: kind[0] for column, kind in kinds.items()})
+        if table.num_rows == 0:  # every figure draws at least one run, and --check compares one
+            raise DataError(f"table {str(path)!r} holds no rows")
+        frame = pd.DataFrame({column: checked_column(table, column, path, ok, allowed, nullable=nullable)
+                              for column, (_, ok, allowed, nullable) in kinds.items()})
+        keys = list(UNIQUE_KEYS.get(name, ()))
+        repeated = frame.duplicated(keys) if keys else None
+        if repeated is not None and repeated.any():
+            row = int(repeated.to_numpy().argmax())
+            raise DataError(f"table {str(path)!r}: row {row} repeats {', '.join(keys)} = "
+                            f"{', '.join(f'{value:g}' for value in frame.loc[row, keys])} of an earlier row")
+        return frame
+    except DataError as error:
+        raise SweepError(f"{error}: {again}") from None
 
 
 # ---------------------------------------------------------------------------- the figures: tidy, then draw
@@ -410,7 +484,7 @@ def check(figure: str, results: str | os.PathLike = COMMITTED_RESULTS, quick: bo
     if not path.exists():
         raise SweepError(f"{path} is missing: run dronefleet reproduce {figure}{' --quick' if quick else ''} "
                          "first (it writes the table that --check compares with)")
-    committed = _read_parquet(path, figure)
+    committed = _read_parquet(path, figure, "runs")
     rows = {(name, run): row for name, run, row in zip(committed["sweep"], committed["run"],
                                                         committed.to_dict("records"))}
     chosen = [key for key in CHECK_RUNS[figure] if key in rows]

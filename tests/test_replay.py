@@ -9,6 +9,7 @@ import shutil
 import subprocess
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
@@ -154,10 +155,24 @@ def test_script_ends_in_the_data_are_escaped(tmp_path):
     assert json.loads(data)["title"] == "</script><b>"
 
 
+#: Text that would break out of (or never close) the data's script element, or fill in a placeholder.
+HOSTILE_TEXT = "<!--<script></script><b>&amp;\u2028\u2029 /*SCENE*/ /*DATA*/ -->"
+
+
+def test_no_text_in_the_data_can_open_a_comment_or_a_script(tmp_path):
+    html = replay.page({"title": HOSTILE_TEXT, "duration_s": 1.0}, "function makeScene() {}")
+    data = re.search(r'id="run-data">(.*?)</script>', html, re.S)[1]
+    assert json.loads(data)["title"] == HOSTILE_TEXT
+    for opening in ("<!--", "<script", "</script", "\u2028", "\u2029", "/*SCENE*/"):
+        assert opening not in data.lower()
+    assert html.count("function makeScene() {}") == 1
+
+
 def _refused(capsys, argv, fragment):
     assert cli.main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("dronefleet: error: ") and err.count("\n") == 1 and fragment in err, err
+    return err
 
 
 def test_bad_run_folders_are_refused_in_one_line(tmp_path, capsys, delivery_run):
@@ -179,7 +194,7 @@ def test_bad_run_folders_are_refused_in_one_line(tmp_path, capsys, delivery_run)
     ("cut short", "orders.parquet not of the run in summary.parquet (another run's config, or unreadable)"),
     ("of the other scenario", "timeseries.parquet not of the run in summary.parquet"),
     ("of another run", "orders.parquet not of the run in summary.parquet"),
-    ("corrupt inside", "holds a table that cannot be read as a delivery run's (Couldn't deserialize thrift"),
+    ("corrupt inside", "orders.parquet' is damaged"),
 ])
 def test_a_run_folder_with_an_unreadable_or_stray_table_is_refused_in_one_line(damage, fragment, tmp_path, capsys,
                                                                               delivery_run, replenishment_run):
@@ -201,6 +216,67 @@ def test_a_run_folder_with_an_unreadable_or_stray_table_is_refused_in_one_line(d
     assert not (tmp_path / "page.html").exists()
 
 
+def with_column(name, values):
+    """A change of a table: column ``name`` replaced by ``values`` (a pyarrow array or a list)."""
+    def change(table):
+        return table.set_column(table.schema.get_field_index(name), name, pa.array(values))
+    return change
+
+
+def without(name):
+    return lambda table: table.drop_columns([name])
+
+
+def tamper_table(path, change):
+    """Rewrite the parquet file ``path`` as ``change(table)``, its metadata (the run's config) kept."""
+    table = pq.read_table(path)
+    pq.write_table(change(table).replace_schema_metadata(table.schema.metadata), path)
+
+
+def first_set(name, value):
+    """Column ``name``'s first value set to ``value``."""
+    def change(table):
+        values = table[name].to_pylist()
+        values[0] = value
+        return with_column(name, pa.array(values, table.schema.field(name).type))(table)
+    return change
+
+
+# a table whose embedded config matches, its contents tampered with: what the page relies on is checked
+TAMPERED_CONTENTS = [
+    ("attempts", first_set("order_id", 10**6), "column 'order_id' holds 1000000 at row 0; allowed: an order of"),
+    ("attempts", first_set("order_id", -1), "column 'order_id' holds -1 at row 0"),
+    ("attempts", first_set("outcome", "teleported"), "column 'outcome' holds 'teleported' at row 0; allowed: "
+                                                     "delivered, aborted, lost, in_flight"),
+    ("attempts", first_set("outcome", None), "column 'outcome' holds null at row 0"),
+    ("attempts", first_set("uav", 5), "column 'uav' holds 5 at row 0; allowed: a UAV of the run, 0 to 4"),
+    ("attempts", first_set("takeoff_s", float("nan")), "column 'takeoff_s' holds nan at row 0"),
+    ("attempts", first_set("takeoff_soc", 1e300), "column 'takeoff_soc' holds 1e+300 at row 0"),
+    ("attempts", first_set("return_soc", float("inf")), "column 'return_soc' holds inf at row 0"),
+    ("attempts", without("outcome"), "has no column 'outcome'"),
+    ("attempts", lambda t: with_column("takeoff_s", t["takeoff_s"].cast(pa.string()))(t),
+     "column 'takeoff_s' is string, not is_floating"),
+    ("orders", first_set("order_id", 7), "column 'order_id' holds 7 at row 0; allowed: the row number"),
+    ("orders", first_set("distance_m", -1.0), "column 'distance_m' holds -1.0 at row 0"),
+    ("orders", without("distance_m"), "has no column 'distance_m'"),
+    ("timeseries", first_set("unallocated", None), "column 'unallocated' holds null at row 0"),
+    ("timeseries", first_set("t_s", float("-inf")), "column 't_s' holds -inf at row 0"),
+]
+
+
+@pytest.mark.parametrize("table, change, fragment", TAMPERED_CONTENTS,
+                         ids=[f"{table}-{fragment[:40]}" for table, _, fragment in TAMPERED_CONTENTS])
+def test_a_table_whose_contents_the_page_cannot_draw_is_refused_in_one_line(table, change, fragment, tmp_path,
+                                                                            capsys, delivery_run):
+    damaged = tmp_path / "run"
+    shutil.copytree(delivery_run, damaged)
+    (damaged / REPLAY_FILE).unlink()
+    tamper_table(damaged / f"{table}.parquet", change)
+    err = _refused(capsys, ["replay", str(damaged), "--out", str(tmp_path / "page.html")], fragment)
+    assert f"{table}.parquet'" in err
+    assert not (tmp_path / "page.html").exists()
+
+
 def test_a_run_too_large_to_play_is_refused_in_one_line_before_its_tables_are_read(tmp_path, capsys, delivery_run,
                                                                                   monkeypatch):
     flights = pq.ParquetFile(delivery_run / "attempts.parquet").metadata.num_rows
@@ -208,6 +284,18 @@ def test_a_run_too_large_to_play_is_refused_in_one_line_before_its_tables_are_re
     monkeypatch.setattr(pq, "read_table", lambda *a, **k: pytest.fail("a table was read"))
     _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "page.html")],
              f"has {flights:,} attempts; a replay page draws at most {flights - 1:,}")
+    assert not (tmp_path / "page.html").exists()
+
+
+@pytest.mark.parametrize("table, limit, what", [("orders", "MAX_ORDERS", "orders"),
+                                                 ("timeseries", "MAX_SAMPLES", "time-series samples")])
+def test_a_table_too_long_to_read_is_refused_in_one_line_before_it_is_read(table, limit, what, tmp_path, capsys,
+                                                                           delivery_run, monkeypatch):
+    rows = pq.ParquetFile(delivery_run / f"{table}.parquet").metadata.num_rows
+    monkeypatch.setattr(delivery_replay, limit, rows - 1)
+    monkeypatch.setattr(pq, "read_table", lambda *a, **k: pytest.fail("a table was read"))
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(tmp_path / "page.html")],
+             f"has {rows:,} {what} in {table}.parquet; a replay page reads at most {rows - 1:,}")
     assert not (tmp_path / "page.html").exists()
 
 
@@ -292,6 +380,16 @@ def test_the_page_plays_in_chromium_without_errors(run, times, request, tmp_path
     assert shots[0] != shots[1]
     dom = chromium(page, f"t={times[1]}", ["--dump-dom"], tmp_path / "profile")
     assert f'data-rendered="{times[1]}"' in dom  # the player ran to the end and drew that time
+
+
+@needs_chromium
+def test_the_page_plays_whatever_text_its_data_holds(delivery_run, tmp_path):
+    data = delivery_data(delivery_run)
+    data["title"] = HOSTILE_TEXT  # a config string, say, shown in the title
+    page = tmp_path / "page.html"
+    page.write_text(replay.page(data, replay.scenario_of_run(delivery_run).replay_script))
+    dom = chromium(page, "t=3000", ["--dump-dom"], tmp_path / "profile")
+    assert 'data-rendered="3000"' in dom  # the player started and drew that time
 
 
 @needs_chromium

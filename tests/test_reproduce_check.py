@@ -71,5 +71,5 @@ def test_a_runs_table_that_is_not_parquet_is_refused_in_one_line(tmp_path, capsy
     assert cli.main(["reproduce", figure, "--check", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.splitlines()) == 1, err
-    assert f"{path} cannot be read as a parquet table (" in err and f"run dronefleet reproduce {figure} " in err
+    assert f"{str(path)!r} is not a readable parquet file (" in err and f"run dronefleet reproduce {figure} " in err
     assert sorted(p.name for p in tmp_path.rglob("*")) == [figure, "runs.parquet"]  # nothing else written

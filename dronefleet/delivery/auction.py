@@ -44,6 +44,11 @@ compiles the plugin itself once unless it is ``cache=True``. :func:`resolve_rule
 and checks a rule by name. Plugins cannot be ``base_rule`` of ``reservation``. An entry
 point named like a built-in rule is not used (a warning says so): its dotted path is.
 
+Files are data: a config read back from a file (a run's tables, a saved fleet, a sweep's
+dataset) may name a plugin, but only the user's own config (TOML file, ``--set``, API argument)
+may make dronefleet import one. :func:`rule_name_problem` checks a name read from a file
+without loading anything: a ``"module:function"`` path is kept as the name it is.
+
 ``reservation`` (docs/delivery-model.md section 9) is not a kernel of this kind: it lets a base rule
 (config ``base_rule``) resolve the immediate bids and adds reservation bids, whose
 forecast is :func:`reservation_wait`; the engine runs the two phases.
@@ -174,6 +179,28 @@ def resolve_rule(name: str) -> Rule:
         _warn_if_shadowed(name)
         return RULES[name]
     return _plugin(name)
+
+
+def rule_name_problem(name: str) -> str | None:
+    """Why ``name``, read from a file, names no rule (the end of a one-line message), or None.
+
+    Nothing is imported or loaded: a built-in rule, the name of an installed entry point (read
+    from the installed packages' metadata) or a well-formed ``"package.module:function"`` path
+    (kept as a name: the file does not choose what code runs) is accepted.
+    """
+    if name in RULES:
+        return None
+    if ":" in name:
+        module_name, _, attribute = name.partition(":")
+        dotted = module_name.split(".") + attribute.split(".")
+        if all(part.isidentifier() for part in dotted):
+            return None
+        return "is not a well-formed plugin path 'package.module:function'"
+    if entry_points(group=ENTRY_POINT_GROUP, name=name):
+        return None
+    names = tuple(RULES) + installed_plugins()
+    return (f"is not a registered winner rule{_suggest(name, names)}. Allowed: {', '.join(map(repr, names))}, "
+            "or a plugin's 'package.module:function'")
 
 
 @functools.cache  # once per name and process: validation resolves the rule of every run

@@ -43,6 +43,7 @@ Decisions
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import json
 import math
@@ -121,13 +122,20 @@ class Options:
         return self.values
 
 
+#: True while a config read back from a file is validated (:func:`config_from_dict` with
+#: ``trusted=False``): its rule is checked by name and never imported (files are data).
+_FROM_DATA: contextvars.ContextVar[bool] = contextvars.ContextVar("dronefleet_config_from_data", default=False)
+
+
 class RegisteredRule:
     """One of the winner rules registered in ``dronefleet.delivery.auction.RULES``, or a plugin rule.
 
     Imported lazily so that ``config`` imports nothing heavy (and no cycle).
     ``base`` restricts it to the built-in rules that can resolve reservation's immediate
     bids; otherwise a plugin (entry point or ``"module:function"``) is allowed too, and
-    loaded and checked by :func:`dronefleet.delivery.auction.resolve_rule`.
+    loaded and checked by :func:`dronefleet.delivery.auction.resolve_rule`, unless the
+    config is read from a file: then only its name is checked
+    (:func:`dronefleet.delivery.auction.rule_name_problem`).
     """
 
     def __init__(self, base: bool = False) -> None:
@@ -135,12 +143,14 @@ class RegisteredRule:
 
     def problem(self, value: str) -> str | None:
         """Why ``value`` names no usable rule (the end of a one-line message), or None."""
-        from .auction import BASE_RULES, RuleError, resolve_rule
+        from .auction import BASE_RULES, RuleError, resolve_rule, rule_name_problem
 
         if self.base:
             return None if value in BASE_RULES else (f"is not a rule that bids on its policy"
                                                      f"{_suggest(value, BASE_RULES)}. "
                                                      f"Allowed: {', '.join(map(repr, BASE_RULES))}")
+        if _FROM_DATA.get():
+            return rule_name_problem(value)
         try:
             resolve_rule(value)
         except RuleError as e:
@@ -543,12 +553,24 @@ def default_config() -> Config:
     return Config()
 
 
-def config_from_dict(d: Mapping[str, Any]) -> Config:
+def config_from_dict(d: Mapping[str, Any], trusted: bool = True) -> Config:
     """Nested ``{section: {key: value}}`` (as :meth:`Config.to_dict` gives) -> Config.
 
-    Missing sections or keys keep their defaults.
+    Missing sections or keys keep their defaults. ``trusted=False`` for a config read back
+    from a file (:func:`dronefleet.delivery.records.read_config`): a plugin rule it names
+    (``"module:function"``) is checked as a name and never imported, so reading a file runs
+    no code. Such a config describes a run; running it loads its rule then
+    (:func:`dronefleet.delivery.simulation.simulate`), but dronefleet itself only ever runs
+    the user's configs.
     """
-    return Config(**_flatten(d))
+    flat = _flatten(d)
+    if trusted:
+        return Config(**flat)
+    token = _FROM_DATA.set(True)
+    try:
+        return Config(**flat)
+    finally:
+        _FROM_DATA.reset(token)
 
 
 def load_config(path: str | PathLike | None = None,

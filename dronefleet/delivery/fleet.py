@@ -106,7 +106,9 @@ def load_fleet(path: str | os.PathLike, config: Config) -> SavedFleet:
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
 
-    from .records import read_config
+    from ..datafiles import DataError
+    from ..records import read_config_dict
+    from .config import config_from_dict
 
     path = seeded_path(path, config.seed)
     where = f"run.fleet_file {str(path)!r}"
@@ -125,11 +127,14 @@ def load_fleet(path: str | os.PathLike, config: Config) -> SavedFleet:
     if rows > MAX_ROWS:
         raise refuse(f"has {rows} rows; a fleet file has at most {MAX_ROWS}")
     try:
-        saved_config = read_config(path)
+        document = read_config_dict(path, "fleet file")
+    except DataError:  # no or bad metadata
+        raise refuse("is not a dronefleet fleet file: its metadata holds no dronefleet config") from None
+    try:
+        # files are data: a plugin rule the file names is not imported (the run's rule is the user's)
+        saved_config = config_from_dict(document, trusted=False)
     except ConfigError as error:
         raise refuse(f"holds a config that is not valid now ({error})") from None
-    except (OSError, pa.ArrowException, TypeError, KeyError, ValueError, RecursionError):  # no or bad metadata
-        raise refuse("is not a dronefleet fleet file: its metadata holds no dronefleet config") from None
     schema = pq.read_schema(path)
     missing = [c for c in COLUMNS if c not in schema.names]
     if missing:

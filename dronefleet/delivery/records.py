@@ -39,7 +39,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pyarrow as pa
 
-from ..records import arrow_array, arrow_table, read_config_dict, write_tables
+from ..records import arrow_array, arrow_table, write_tables
+from ..records import read_config as read_file_config
 from .config import SECONDS_PER_WEEK, Config, config_from_dict
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
 
@@ -176,5 +177,6 @@ def write_run(result: RunResult, out_dir: str | os.PathLike, overwrite: bool = F
 
 
 def read_config(path: str | os.PathLike) -> Config:
-    """The resolved delivery config embedded in a dronefleet parquet file."""
-    return config_from_dict(read_config_dict(path))
+    """The config embedded in a delivery parquet file; a plugin rule it names is kept as a name,
+    never imported (files are data). DataError naming the file if it holds no valid config."""
+    return read_file_config(path, lambda document: config_from_dict(document, trusted=False))

@@ -14,12 +14,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pyarrow.parquet as pq
+import pyarrow as pa
 
 from ..config import ConfigError
+from ..datafiles import checked_column, parquet_rows, read_parquet
 from .config import SECONDS_PER_WEEK, Config
 
-__all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS"]
+__all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS", "MAX_ORDERS", "MAX_SAMPLES"]
 
 #: Bearing step between consecutive order ids [rad]: successive orders never line up.
 GOLDEN_ANGLE = math.pi * (3.0 - math.sqrt(5.0))
@@ -27,6 +28,10 @@ OUTCOMES = ("delivered", "aborted", "lost", "in_flight")
 #: At most this many attempts in a page (~90 bytes each: a page of ~90 MB, built in a few GB
 #: of memory); the paper's 8-week run has ~6,000, the largest run allowed ~10^7.
 MAX_FLIGHTS = 1_000_000
+#: At most this many orders and time-series samples are read for a page (``--replay`` refuses
+#: runs expecting more than MAX_FLIGHTS orders): a tampered table is refused before it is read.
+MAX_ORDERS = 2 * MAX_FLIGHTS
+MAX_SAMPLES = 10_000_001  # RUN_LIMITS["samples"] + 1
 
 
 def _rounded(values, decimals):
@@ -43,6 +48,51 @@ def check_replayable(config: Config) -> None:
     if orders > MAX_FLIGHTS:
         raise ConfigError(f"--replay: the run would hold ~{orders:.2g} orders and a replay page draws at most "
                           f"{MAX_FLIGHTS:,} attempts: run it without --replay, or a shorter run (horizon_weeks)")
+
+
+def _checked_tables(run_dir: Path, config: Config):
+    """The orders, attempts and time series of the run in ``run_dir`` as pandas frames, every
+    column the page uses checked value by value first (the page indexes orders by id, UAVs by
+    number and outcomes by name): DataError naming the file and column otherwise."""
+    import pandas as pd
+
+    horizon, n_uavs = config.horizon_s, config.n_uavs
+    integer, floating, text = pa.types.is_integer, pa.types.is_floating, pa.types.is_string
+    in_run = f"finite, in [0, {horizon:g}] s"
+    soc = "finite, in [0, 100] %"
+
+    def read(name, columns):
+        """``{column: (type predicate, ok, allowed, nullable)}`` of table ``name``, checked."""
+        path = run_dir / f"{name}.parquet"
+        table = read_parquet(path, {column: spec[0] for column, spec in columns.items()})
+        return pd.DataFrame({column: checked_column(table, column, path, ok, allowed, nullable=nullable)
+                             for column, (_, ok, allowed, nullable) in columns.items()})
+
+    def times(x):
+        return np.isfinite(x) & (x >= 0) & (x <= horizon)
+
+    def percent(x):
+        return np.isfinite(x) & (x >= 0) & (x <= 100)
+
+    orders = read("orders", {
+        "order_id": (integer, lambda x: x == np.arange(len(x)), "the row number (orders 0, 1, 2, ... in order)", False),
+        "arrival_s": (floating, times, in_run, False),
+        "distance_m": (floating, lambda x: np.isfinite(x) & (x >= 0), "finite, >= 0 m", False)})
+    attempts = read("attempts", {
+        "uav": (integer, lambda x: (x >= 0) & (x < n_uavs), f"a UAV of the run, 0 to {n_uavs - 1}", False),
+        "order_id": (integer, lambda x: (x >= 0) & (x < len(orders)),
+                     f"an order of orders.parquet, 0 to {len(orders) - 1}", False),
+        "takeoff_s": (floating, times, in_run, False),
+        "takeoff_soc": (floating, percent, soc, False),
+        "outcome": (text, lambda x: np.isin(x, OUTCOMES), ", ".join(OUTCOMES), False),
+        # null: the flight had not turned, or landed, by the horizon
+        "turn_s": (floating, np.isfinite, "finite or null", True),
+        "return_s": (floating, np.isfinite, "finite or null", True),
+        "return_soc": (floating, percent, f"{soc}, or null", True)})
+    series = read("timeseries", {
+        "t_s": (floating, times, in_run, False),
+        "unallocated": (integer, lambda x: x >= 0, "a count >= 0", False)})
+    return orders, attempts, series
 
 
 def replay_data(run_dir: Path) -> dict[str, Any]:
@@ -63,15 +113,17 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
     from .scenario import describe
 
     config = read_config(run_dir / "summary.parquet")
-    flights = pq.ParquetFile(run_dir / "attempts.parquet").metadata.num_rows
+    flights = parquet_rows(run_dir / "attempts.parquet")
     if flights > MAX_FLIGHTS:  # before the tables are read: the page would not fit in memory, nor play
         raise ConfigError(f"RUN_DIR {str(run_dir)!r} has {flights:,} attempts; a replay page draws at most "
                           f"{MAX_FLIGHTS:,}: replay a shorter run (horizon_weeks) or one of fewer orders")
+    for table, limit, what in (("orders", MAX_ORDERS, "orders"), ("timeseries", MAX_SAMPLES, "time-series samples")):
+        rows = parquet_rows(run_dir / f"{table}.parquet")
+        if rows > limit:
+            raise ConfigError(f"RUN_DIR {str(run_dir)!r} has {rows:,} {what} in {table}.parquet; a replay page "
+                              f"reads at most {limit:,}: replay a shorter run (horizon_weeks)")
+    orders, attempts, series = _checked_tables(run_dir, config)
     horizon, speed = config.horizon_s, config.speed_m_s
-    orders = pq.read_table(run_dir / "orders.parquet", columns=["order_id", "arrival_s", "distance_m"]).to_pandas()
-    attempts = pq.read_table(run_dir / "attempts.parquet", columns=[
-        "uav", "order_id", "takeoff_s", "takeoff_soc", "outcome", "turn_s", "return_s", "return_soc"]).to_pandas()
-    series = pq.read_table(run_dir / "timeseries.parquet", columns=["t_s", "unallocated"]).to_pandas()
 
     a = attempts.sort_values(["uav", "takeoff_s"], kind="stable").reset_index(drop=True)
     distance = orders["distance_m"].to_numpy()[a["order_id"].to_numpy()]

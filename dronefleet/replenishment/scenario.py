@@ -262,10 +262,11 @@ def config_from_dict(document: Mapping[str, Any]) -> Config:
 
 
 def read_config(path: str | os.PathLike) -> Config:
-    """The config embedded in a replenishment parquet file."""
-    from ..records import read_config_dict
+    """The config embedded in a replenishment parquet file; DataError naming the file if it holds
+    no valid config."""
+    from ..records import read_config as read
 
-    return config_from_dict(read_config_dict(path))
+    return read(path, config_from_dict)
 
 
 # ---------------------------------------------------------------- running

@@ -21,7 +21,8 @@ import pandas as pd
 from ..sweeps import SweepError, load_sweep
 from . import experiments
 from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
-from .params import Params
+from ..config import ConfigError
+from .scenario import config_from_dict, replace
 
 if TYPE_CHECKING:
     from ..reproduce import Study
@@ -131,7 +132,13 @@ def check(study: Study, figure: str) -> list[str]:
             raise SweepError(f"{path} holds {len(configs)} configurations with {label}; --check needs exactly one")
         values = {k: v.item() if hasattr(v, "item") else v for k, v in configs.iloc[0].items()}
         mine = mine.sort_values("trial")
-        result = simulate(Params(**values), len(mine), first_trial=int(mine["trial"].iloc[0]))
+        # the table's values are data: validated (ranges, run size) as a config file's before anything runs
+        try:
+            config = replace(config_from_dict({}), {**values, "trials": len(mine),
+                                                    "first_trial": int(mine["trial"].iloc[0])})
+        except ConfigError as error:
+            raise SweepError(f"{path}: the configuration {label} cannot be re-run: {error}") from None
+        result = simulate(config.params, len(mine), first_trial=config.first_trial)
         fresh = pd.DataFrame({c: result[c] for c in ("trial", "seed", *METRIC_COLUMNS)})
         found = [f"{figure} {label} trial {trial}: {column} committed {old!r}, re-run {new!r}"
                  for column in fresh.columns

@@ -1,0 +1,139 @@
+"""``reproduce --redraw`` and ``--check`` read the figures' tables as data: every column they rely on is
+checked (present, of its type, value by value) before any drawing or re-run, and a table that fails
+is one line naming the file and the column, exit code 2, with nothing drawn, run or written.
+
+The tables are copies of the committed ``results/``, each damaged in one column.
+"""
+
+import importlib
+import shutil
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from dronefleet import cli
+
+RESULTS = Path(__file__).resolve().parents[1] / "results"
+
+
+def copy_tables(figure, root):
+    """The parquet tables of the committed ``figure`` copied to ``root/figure``."""
+    (root / figure).mkdir(parents=True)
+    for table in (RESULTS / figure).glob("*.parquet"):
+        shutil.copy(table, root / figure / table.name)
+
+
+def set_first(name, value):
+    """A change of a table: column ``name``'s first value set to ``value`` (of the column's type)."""
+    def change(table):
+        values = table[name].to_pylist()
+        values[0] = value
+        return table.set_column(table.schema.get_field_index(name), name, pa.array(values, table.schema.field(name).type))
+    return change
+
+
+def as_text(name):
+    return lambda table: table.set_column(table.schema.get_field_index(name), name, table[name].cast(pa.string()))
+
+
+def without(name):
+    return lambda table: table.drop_columns([name])
+
+
+def tamper(path, change):
+    table = pq.read_table(path)
+    pq.write_table(change(table).replace_schema_metadata(table.schema.metadata), path)
+
+
+def refused(argv, capsys, *fragments):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dronefleet: error: ") and err.count("\n") == 1, err
+    for fragment in fragments:
+        assert fragment in err, err
+
+
+REDRAWN = [
+    ("fig16", "outcomes", without("rule"), "has no column 'rule'"),
+    ("fig16", "outcomes", as_text("tau_minutes"), "column 'tau_minutes' is string, not _is_number"),
+    ("fig16", "outcomes", set_first("delivered", None), "column 'delivered' holds null at row 0"),
+    ("fig16", "outcomes", set_first("tau_minutes", float("nan")), "column 'tau_minutes' holds nan at row 0"),
+    ("fig16", "backlog", set_first("rule", None), "column 'rule' holds null at row 0; allowed: text"),
+    ("fig16", "backlog", without("backlog_age_s"), "has no column 'backlog_age_s'"),
+    ("fig17", "accuracy", set_first("confidence", float("inf")), "column 'confidence' holds inf at row 0"),
+    ("fig17", "accuracy", set_first("week", None), "column 'week' holds null at row 0"),
+    ("fig18", "winner_soh", set_first("soc", float("nan")), "column 'soc' holds nan at row 0"),
+    ("fig18", "winner_soh", without("mass_kg"), "has no column 'mass_kg'"),
+    ("fig19", "thresholds", set_first("best", None), "column 'best' holds null at row 0"),
+    ("fig19", "thresholds", as_text("runs"), "column 'runs' is string"),
+    ("fig20", "pending", set_first("pending", -1), "column 'pending' holds -1 at row 0; allowed: an integer >= 0"),
+    ("fig20", "pending", without("arrival_week"), "has no column 'arrival_week'"),
+    ("fig10", "runs", set_first("strategy", None), "column 'strategy' holds null at row 0"),
+    ("fig10", "bounds", without("bound_work"), "has no column 'bound_work'"),
+    ("fig09", "runs", as_text("work"), "column 'work' is string"),
+    ("fig10", "runs", lambda table: table.slice(0, 0), "holds no rows"),
+    ("fig16", "outcomes", lambda table: table.slice(0, 0), "holds no rows"),
+    ("fig17", "accuracy", lambda table: table.slice(0, 0), "holds no rows"),
+    ("fig18", "winner_soh", lambda table: pa.concat_tables([table, table.slice(0, 1)]), "repeats soc, mass_kg, "
+                                                                                        "distance_m = "),
+]
+
+
+@pytest.mark.parametrize("figure, table, change, fragment", REDRAWN,
+                         ids=[f"{figure}-{table}-{fragment[:30]}" for figure, table, _, fragment in REDRAWN])
+def test_redraw_refuses_a_table_it_cannot_draw_in_one_line(figure, table, change, fragment, tmp_path, capsys):
+    copy_tables(figure, tmp_path)
+    path = tmp_path / figure / f"{table}.parquet"
+    tamper(path, change)
+    before = sorted(tmp_path.rglob("*"))
+    refused(["reproduce", figure, "--redraw", "--out", str(tmp_path)], capsys, str(path), fragment)
+    assert sorted(tmp_path.rglob("*")) == before  # nothing drawn
+
+
+def test_the_committed_tables_redraw(tmp_path, capsys):
+    copy_tables("fig20", tmp_path)
+    assert cli.main(["reproduce", "fig20", "--redraw", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "fig20" / "fig20.png").is_file()
+
+
+def no_run(*args, **kwargs):
+    raise AssertionError("--check ran a simulation before its table was checked")
+
+
+@pytest.mark.parametrize("change, fragment", [
+    (without("run"), "has no column 'run'"),
+    (set_first("sweep", None), "column 'sweep' holds null at row 0"),
+    (lambda table: table.append_column("extra", pa.array([[1]] * table.num_rows)), "column 'extra' is list<"),
+])
+def test_check_refuses_a_delivery_runs_table_it_cannot_compare_before_any_run(change, fragment, tmp_path, capsys,
+                                                                             monkeypatch):
+    from dronefleet.delivery import simulation
+
+    monkeypatch.setattr(simulation, "simulate", no_run)
+    copy_tables("fig16", tmp_path)
+    path = tmp_path / "fig16" / "runs.parquet"
+    tamper(path, change)
+    refused(["reproduce", "fig16", "--check", "--out", str(tmp_path)], capsys, str(path), fragment)
+
+
+@pytest.mark.parametrize("column, value, fragment", [
+    ("ticks", 10**12, "the configuration strategy=fixed cannot be re-run: trials x (ticks"),  # days of running
+    ("work_ratio", -1.0, "work_ratio"),
+    ("charge_rate", float("nan"), "column 'charge_rate' holds nan at row 0"),
+    ("trial", 0, "first_trial = 0 is out of range"),
+    ("n_workers", -6, "n_workers"),
+])
+def test_check_refuses_a_replenishment_configuration_it_cannot_re_run_before_any_run(column, value, fragment, tmp_path,
+                                                                                    capsys, monkeypatch):
+    # the module (the package's attribute of that name is its function)
+    monkeypatch.setattr(importlib.import_module("dronefleet.replenishment.simulate"), "simulate", no_run)
+    copy_tables("fig09", tmp_path)
+    path = tmp_path / "fig09" / "runs.parquet"
+
+    def change(table):  # every row: the configurations --check picks hold the value too
+        index = table.schema.get_field_index(column)
+        return table.set_column(index, column, pa.array([value] * table.num_rows, table.schema.field(column).type))
+    tamper(path, change)
+    refused(["reproduce", "fig09", "--check", "--out", str(tmp_path)], capsys, str(path), fragment)

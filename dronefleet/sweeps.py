@@ -104,7 +104,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from . import console, scenarios
-from .config import SCENARIO_KEY, ConfigError, read_toml
+from .config import SCENARIO_KEY, ConfigError, _show, check_depth, read_toml
 from .outputs import OutputError, probe_folders
 from .scenarios import Scenario
 
@@ -229,6 +229,11 @@ def _parameters(table, scenario: Scenario, where: str) -> dict:
         raise SweepError(f"{where} must be a table of key = value")
     out = {}
     for key, value in table.items():
+        # keys from the Python API may be anything: a key is a name, never joined or resolved otherwise
+        for name in (key, *(value if isinstance(value, dict) else ())):
+            if not isinstance(name, str):
+                raise SweepError(f"{where}: key {_show(name)} is not a string: keys are names such as "
+                                 "'tau_minutes' or 'orders.tau_minutes'")
         entries = [(f"{key}.{k}", v) for k, v in value.items()] if isinstance(value, dict) else [(key, value)]
         for text, v in entries:
             try:
@@ -281,12 +286,12 @@ def _products(grid, scenario: Scenario, where: str) -> list[tuple[str, dict[str,
                                  "(a partition value is one number or string); set it in [set] or the base",
                                  [name])
             if not isinstance(values, list):
-                raise SweepError(f"{where}: {label}: {name} must be a list of values, got {values!r} "
+                raise SweepError(f"{where}: {label}: {name} must be a list of values, got {_show(values)} "
                                  "(a fixed value goes in [set])", [name])
             if not values:
                 raise SweepError(f"{where}: {label}: {name} is an empty list: it would make no runs", [name])
             if (value := _repeated(values)) is not None:
-                raise SweepError(f"{where}: {label}: {name} lists {value!r} more than once", [name])
+                raise SweepError(f"{where}: {label}: {name} lists {_show(value)} more than once", [name])
         # [grid]'s canonical key order: a file's key order changes neither its runs nor its tasks
         products.append((label, dict(sorted(product.items())) if canonical else product))
     return products
@@ -299,17 +304,17 @@ def _seeds(value, where: str) -> tuple:
         start, count = value.get("start", 0), value.get("count")
         if not all(isinstance(x, int) and not isinstance(x, bool) for x in (start, count)) or count < 1:
             raise SweepError(f"{where}: a range is {{ start = <integer>, count = <integer >= 1> }}, "
-                             f"got {value!r}", ["seed"])
+                             f"got {_show(value)}", ["seed"])
         if count > MAX_RUNS:  # before the tuple is built: a count of 10**12 would exhaust memory
             raise SweepError(f"{where}: count = {count} seeds is more than a sweep may run: "
                              f"at most {MAX_RUNS:,} runs per sweep", ["seed"])
         return tuple(range(start, start + count))
     if isinstance(value, list) and value:
         if (seed := _repeated(value)) is not None:
-            raise SweepError(f"{where}: seed {seed!r} is listed more than once", ["seed"])
+            raise SweepError(f"{where}: seed {_show(seed)} is listed more than once", ["seed"])
         return tuple(value)
     raise SweepError(f"{where}: give a non-empty list (seeds = [0, 1, 2]) or a range "
-                     f"(seeds = {{ start = 0, count = 20 }}), got {value!r}", ["seed"])
+                     f"(seeds = {{ start = 0, count = 20 }}), got {_show(value)}", ["seed"])
 
 
 def _scenario(head: dict, base: Path | None, path: Path) -> Scenario:
@@ -372,6 +377,11 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     memory, as :func:`dronefleet.api.sweep` does): ``path`` names it in messages, gives the
     default name (its stem) and the folder ``[sweep] base`` is relative to; ``text`` is kept
     in ``collected.parquet``. Raises SweepError as :func:`load_sweep` does."""
+    try:  # a document built in Python (dronefleet.sweep) has not been through read_toml
+        for value, what in ((doc, ""), (changes, "changes"), (seeds, "seeds")):
+            check_depth(value, f"{path}: ", what)
+    except ConfigError as error:
+        raise SweepError(str(error)) from None
     _check_names(doc, _SECTIONS, f"{path}: sections")
     head = doc.get("sweep", {})
     if not isinstance(head, dict):
@@ -429,7 +439,7 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     for label, product in products:
         for point in itertools.product(*product.values()):
             changes = dict(zip(product, point))
-            where = f"{label} at {', '.join(f'{k} = {v!r}' for k, v in changes.items())}"
+            where = f"{label} at {', '.join(f'{k} = {_show(v)}' for k, v in changes.items())}"
             try:
                 at_point = scenario.replace(config, changes)
             except ConfigError as error:

@@ -1,0 +1,136 @@
+"""Hostile values, from every door (config and sweep files, ``--set``, ``dronefleet.run`` and
+``dronefleet.sweep``): each is refused in one line naming the key or argument (a ConfigError in
+Python, exit 2 on the command line), and the checks themselves neither crash nor crawl: values
+nested thousands deep (TOML's dotted keys ``a.a.a...``, Python lists), holding themselves, of
+thousands of digits, or whose repeats must be found among 100,000 lists.
+"""
+
+import math
+
+import pytest
+
+import dronefleet
+from dronefleet import cli
+from dronefleet.config import MAX_DEPTH, ConfigError, _show
+
+DEEP_KEY = "a." * 5000 + "a"   # TOML builds the tables of dotted keys without recursion: any depth
+
+
+def nested(depth, leaf=1):
+    for _ in range(depth):
+        leaf = [leaf]
+    return leaf
+
+
+def holding_itself():
+    value = []
+    value.append(value)
+    return value
+
+
+def refused(capsys, args, *fragments):
+    """Exit 2 and ONE stderr line holding every fragment, no traceback."""
+    try:
+        code = cli.main(args)
+    except SystemExit as stop:
+        code = stop.code
+    err = capsys.readouterr().err
+    assert code == 2, err[-2000:]
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err[-2000:]
+    assert all(fragment in err for fragment in fragments), err
+
+
+@pytest.mark.parametrize("text, key", [
+    (f'scenario = "replenishment"\n[run]\ntrials.{DEEP_KEY} = 1\n', "run.trials.a.a"),
+    (f"[orders]\ntau_minutes.{DEEP_KEY} = 1\n", "orders.tau_minutes.a.a"),
+    (f"[orders]\ntau_minutes = [{{{DEEP_KEY} = 1}}]\n", "orders.tau_minutes[0].a.a"),
+])
+def test_config_files_nested_deeply_by_dotted_keys_are_refused_naming_the_key(tmp_path, capsys, text, key):
+    path = tmp_path / "deep.toml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    refused(capsys, ["run", str(path), "--out", str(out)], str(path), key, f"more than {MAX_DEPTH} deep")
+    assert not out.exists()
+    if "replenishment" in text:
+        refused(capsys, ["bounds", str(path)], key)
+
+
+@pytest.mark.parametrize("body, key", [
+    (f"[grid]\nrun.trials.{DEEP_KEY} = 1\n", "grid.run.trials.a.a"),
+    (f"[set]\nrun.trials.{DEEP_KEY} = 1\n[grid]\nticks = [10]\n", "set.run.trials.a.a"),
+    (f"[grid]\nticks = [{{{DEEP_KEY} = 1}}, 2]\n", "grid.ticks[0].a.a"),
+])
+def test_sweep_files_nested_deeply_are_refused_naming_the_key(tmp_path, capsys, body, key):
+    path = tmp_path / "deep.toml"
+    path.write_text('[sweep]\nscenario = "replenishment"\n' + body)
+    results = tmp_path / "results"
+    refused(capsys, ["sweep", "plan", str(path), "--results", str(results)], key)
+    assert not results.exists()
+
+
+@pytest.mark.parametrize("value", [f"{{{DEEP_KEY} = 1}}", f"[{{{DEEP_KEY} = 1}}]"])
+def test_set_values_nested_deeply_are_refused_naming_the_key(tmp_path, capsys, value):
+    refused(capsys, ["run", "--set", f"tau_minutes={value}", "--out", str(tmp_path / "out")],
+            "--set tau_minutes", f"more than {MAX_DEPTH} deep")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_value_is_shown_from_its_first_characters_however_deep_or_big():
+    assert _show(nested(5000)) == "[" * 57 + "..."
+    assert _show(holding_itself()) == "[" * 57 + "..."
+    assert _show([10**5000]) == "[<an integer of 16610 bits>]"
+    assert _show(10**5000) == "an integer of 16610 bits"
+    assert _show(list(range(10**6))).endswith("...") and len(_show(list(range(10**6)))) == 60
+    for value in ({"a": (1,), "b": set(), "c": frozenset({2})}, [], (), {}, "x", 1.5, None):
+        assert _show(value) == repr(value)
+
+
+BIG = 10**5000   # more digits than int() and repr() take (sys.get_int_max_str_digits)
+REPLENISHMENT = {"base": "replenishment"}
+
+
+@pytest.mark.parametrize("call, fragments", [
+    (lambda: dronefleet.run("replenishment", trials=nested(5000)), ["trials[0][0]", "deep"]),
+    (lambda: dronefleet.run("replenishment", trials=holding_itself()), ["trials[0][0]", "deep"]),
+    (lambda: dronefleet.run(set={"orders.tau_minutes": {"a": nested(5000)}}), ["orders.tau_minutes.a[0]"]),
+    (lambda: dronefleet.run("replenishment", trials=BIG), ["run.trials = an integer of 16610 bits"]),
+    (lambda: dronefleet.run(seed=BIG), ["run.seed = an integer of 16610 bits"]),
+    (lambda: dronefleet.run("replenishment", work_ratio=math.nan), ["work_ratio = nan"]),
+    (lambda: dronefleet.run("replenishment", work_ratio=-math.inf), ["work_ratio = -inf"]),
+    (lambda: dronefleet.run("replenishment", worker_capacity=10**400), ["worker_capacity"]),
+    (lambda: dronefleet.run("replenishment", trials={1, 2}), ["run.trials must be an integer, got set"]),
+    (lambda: dronefleet.run("replenishment", trials=b"1"), ["run.trials must be an integer, got bytes"]),
+    (lambda: dronefleet.run("replenishment", strategy="x" * 10**6), ["robots.strategy = 'xxx"]),
+    (lambda: dronefleet.run(set={"x" * 10**6: 1}), ["unknown key 'xxx"]),
+    (lambda: dronefleet.run(set={1: 2}), ["config key 1 is not a string"]),
+    (lambda: dronefleet.run("bad\0name.toml"), ["'bad\\x00name.toml'", "NUL"]),
+    (lambda: dronefleet.run(b"paper.toml"), ["config=b'paper.toml'"]),
+    (lambda: dronefleet.sweep({1: [1]}, **REPLENISHMENT), ["[grid]: key 1 is not a string"]),
+    (lambda: dronefleet.sweep({None: [1]}, **REPLENISHMENT), ["[grid]: key None is not a string"]),
+    (lambda: dronefleet.sweep({b"trials": [1]}, **REPLENISHMENT), ["[grid]: key b'trials' is not a string"]),
+    (lambda: dronefleet.sweep({("trials",): [1]}, **REPLENISHMENT), ["key ('trials',) is not a string"]),
+    (lambda: dronefleet.sweep({"run": {1: [1]}}, **REPLENISHMENT), ["[grid]: key 1 is not a string"]),
+    (lambda: dronefleet.sweep({"trials": [1]}, set={1: 2}, **REPLENISHMENT), ["[set]: key 1 is not a string"]),
+    (lambda: dronefleet.sweep({"trials": [nested(5000)]}, **REPLENISHMENT), ["grid.trials[0][0]", "deep"]),
+    (lambda: dronefleet.sweep({"trials": [holding_itself()]}, **REPLENISHMENT), ["grid.trials[0][0]", "deep"]),
+    (lambda: dronefleet.sweep({"trials": [1]}, set={"ticks": nested(5000)}, **REPLENISHMENT), ["set.ticks[0]"]),
+    (lambda: dronefleet.sweep({"trials": [BIG]}, **REPLENISHMENT), ["trials = an integer of 16610 bits"]),
+    (lambda: dronefleet.sweep({"trials": [1]}, set={"ticks": BIG}, **REPLENISHMENT),
+     ["run.ticks = an integer of 16610 bits"]),
+    (lambda: dronefleet.sweep({"trials": [1]}, seeds=[BIG], **REPLENISHMENT),
+     ["run.first_trial = an integer of 16610 bits"]),
+    (lambda: dronefleet.sweep({"trials": [1]}, seeds=[math.nan], **REPLENISHMENT), ["first_trial", "nan"]),
+    (lambda: dronefleet.sweep({"trials": [1]}, base="bad\0name.toml"), ["'bad\\x00name.toml'", "NUL"]),
+    (lambda: dronefleet.sweep({"work_ratio": [math.inf]}, **REPLENISHMENT), ["work_ratio = inf"]),
+    (lambda: dronefleet.sweep({"work_ratio": {1.0, 2.0}}, **REPLENISHMENT), ["work_ratio must be a list"]),
+    (lambda: dronefleet.sweep({"strategy": ["x" * 10**6]}, **REPLENISHMENT), ["strategy = 'xxx"]),
+    (lambda: dronefleet.sweep({"transfer_loss": [0.0, -0.0]}, **REPLENISHMENT), ["lists -0.0 more than once"]),
+    (lambda: dronefleet.sweep({"ticks": [[1] * 10**6]}, **REPLENISHMENT), ["must be an integer, got list"]),
+], ids=lambda value: None if callable(value) else "")
+def test_hostile_api_arguments_are_one_line_config_errors_naming_them(call, fragments):
+    with pytest.raises(ConfigError) as error:
+        call()
+    message = str(error.value)
+    assert "\n" not in message and len(message) < 1000, message[:2000]
+    assert all(fragment in message for fragment in fragments), message
+

@@ -250,18 +250,46 @@ def _parameters(table, scenario: Scenario, where: str) -> dict:
 
 
 def _repeated(values: list):
-    """The first value that equals an earlier one (15 equals 15.0), or None; in one pass over
-    hashable values, as a grid of 100,000 values must not take minutes to check."""
+    """The first value that equals an earlier one (15 equals 15.0 and True, [15] equals [15.0], as
+    Python's ``==`` has them), or None; in one pass, lists too, as a grid of 100,000 values must
+    not take minutes to check. The values are nested at most :data:`~dronefleet.config.MAX_DEPTH` deep."""
     seen = set()  # equal numbers hash alike: 15 and 15.0 meet here too
-    for i, value in enumerate(values):
-        try:
-            if value in seen:
-                return value
-            seen.add(value)
-        except TypeError:  # unhashable (a list): compared with every earlier value
-            if value in values[:i]:
-                return value
+    for value in values:
+        key = _hashable(value)
+        if key in seen:
+            return value
+        seen.add(key)
     return None
+
+
+class _Container:
+    """Tags :func:`_hashable`'s stand-ins for lists and dicts: no value given can equal them."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+
+_LIST, _DICT, _OTHER = _Container("list"), _Container("dict"), _Container("unhashable")
+
+
+def _hashable(value):
+    """A hashable stand-in for ``value`` that equals another's exactly when the values are ``==``:
+    a list by its items' stand-ins (never equal to a tuple, as ``[1] != (1,)``), a dict by its
+    items, a set as a frozenset. Another unhashable value (from the API: a bytearray, an array)
+    stands for itself alone; no config holds one, and its run is refused naming it."""
+    if isinstance(value, list):
+        return _LIST, tuple(_hashable(v) for v in value)
+    if isinstance(value, tuple):
+        return tuple(_hashable(v) for v in value)
+    if isinstance(value, dict):
+        return _DICT, frozenset((k, _hashable(v)) for k, v in value.items())
+    if isinstance(value, set):
+        return frozenset(value)
+    try:
+        hash(value)
+    except TypeError:
+        return _OTHER, id(value)
+    return value
 
 
 def _products(grid, scenario: Scenario, where: str) -> list[tuple[str, dict[str, list]]]:

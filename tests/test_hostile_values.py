@@ -10,7 +10,7 @@ import math
 import pytest
 
 import dronefleet
-from dronefleet import cli
+from dronefleet import cli, sweeps as sw
 from dronefleet.config import MAX_DEPTH, ConfigError, _show
 
 DEEP_KEY = "a." * 5000 + "a"   # TOML builds the tables of dotted keys without recursion: any depth
@@ -133,4 +133,37 @@ def test_hostile_api_arguments_are_one_line_config_errors_naming_them(call, frag
     message = str(error.value)
     assert "\n" not in message and len(message) < 1000, message[:2000]
     assert all(fragment in message for fragment in fragments), message
+
+
+class Counted:
+    """A value that counts the comparisons made with it (equal only to itself)."""
+
+    comparisons = 0
+
+    def __init__(self, n):
+        self.n = n
+
+    def __hash__(self):
+        return self.n
+
+    def __eq__(self, other):
+        Counted.comparisons += 1
+        return self is other
+
+
+def test_repeated_lists_are_found_without_comparing_every_pair():
+    # 30,000 lists compared pairwise took 14 s; 100,000 (the cap) hung
+    Counted.comparisons = 0
+    values = [[Counted(n)] for n in range(2000)]
+    assert sw._repeated(values) is None
+    assert Counted.comparisons < len(values)
+
+
+@pytest.mark.parametrize("values, repeated", [
+    ([[1], [1.0]], [1.0]), ([[1], [True]], [True]), ([[1, [2]], [1, [2.0]]], [1, [2.0]]),
+    ([[1], (1,)], None), ([[1], [1, 1]], None), ([{"a": [1]}, {"a": [1.0]}], {"a": [1.0]}),
+    ([{"a": 1}, {"a": 2}], None), ([[0.0], [-0.0]], [-0.0]), ([1, True], True), ([[], ()], None),
+])
+def test_repeated_values_are_those_python_finds_equal(values, repeated):
+    assert sw._repeated(values) == repeated
 

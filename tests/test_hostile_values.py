@@ -6,6 +6,8 @@ thousands of digits, or whose repeats must be found among 100,000 lists.
 """
 
 import math
+import re
+from pathlib import Path
 
 import pytest
 
@@ -13,6 +15,7 @@ import dronefleet
 from dronefleet import cli, sweeps as sw
 from dronefleet.config import MAX_DEPTH, ConfigError, _show
 
+REPLENISHMENT_TOML = Path(dronefleet.__file__).resolve().parent.parent / "configs" / "replenishment.toml"
 DEEP_KEY = "a." * 5000 + "a"   # TOML builds the tables of dotted keys without recursion: any depth
 
 
@@ -167,3 +170,105 @@ def test_repeated_lists_are_found_without_comparing_every_pair():
 def test_repeated_values_are_those_python_finds_equal(values, repeated):
     assert sw._repeated(values) == repeated
 
+
+# --------------------------------------------------------------------------- replenishment limits
+
+def extremes():
+    """(key, value) of every number of the replenishment scenario at its lowest and highest allowed."""
+    from dronefleet.replenishment.params import UPPER_LIMITS
+
+    lowest = {"worker_capacity": math.ulp(0.0), "charger_capacity_factor": math.ulp(0.0),
+              "work_ratio": math.ulp(0.0), "charge_rate": math.ulp(0.0), "transfer_loss": 0.0,
+              "trials": 1, "ticks": 1, "sample_every": 1}
+    highest = {**{name: most for name, (most, _) in UPPER_LIMITS.items()},
+               "transfer_loss": math.nextafter(1.0, 0.0)}
+    return [(key, value) for key in lowest for value in (lowest[key], highest[key])]
+
+
+@pytest.mark.parametrize("strategy", ["fixed", "mobile"])
+@pytest.mark.parametrize("key, value", extremes())
+def test_every_number_at_its_limits_gives_finite_bounds_without_a_warning(capsys, strategy, key, value):
+    import warnings
+
+    from dronefleet.replenishment import BoundUndefinedError, constant_supply_bounds, fixed_bounds
+    from dronefleet.replenishment.scenario import load, replace
+
+    n_chargers = 0 if strategy == "fixed" else 1
+    small = {"trials": 1, "ticks": 1, "n_workers": 1, "sample_every": 10**8} if key in ("ticks", "trials") else {}
+    config = replace(load(), {"strategy": strategy, "n_chargers": n_chargers, **small, key: value})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for bound in (fixed_bounds, constant_supply_bounds):
+            try:
+                found = bound(config.params)
+            except BoundUndefinedError:  # refused in one line, as `dronefleet bounds` says it
+                continue
+            assert all(math.isfinite(x) for x in vars(found).values()), (bound.__name__, found)
+
+
+@pytest.mark.parametrize("key, value", [(k, v) for k, v in extremes() if k not in ("trials", "ticks")])
+def test_a_short_run_at_each_limit_is_finite_without_a_warning(key, value):
+    import warnings
+
+    import numpy as np
+
+    from dronefleet.replenishment.scenario import load, replace, simulate
+
+    config = replace(load(), {"trials": 1, "ticks": 200, "n_chargers": 2, key: value})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tables = simulate(config)
+    for table in tables.values():
+        for column in table.column_names:
+            assert np.isfinite(np.asarray(table.column(column).to_pylist(), dtype=float)).all(), column
+
+
+@pytest.mark.parametrize("key, value", [("worker_capacity", 1e308), ("work_ratio", 1e308), ("charge_rate", 1e7),
+                                        ("charger_capacity_factor", 1e308), ("ticks", 10**8 + 1),
+                                        ("trials", 10**5 + 1), ("sample_every", 10**8 + 1)])
+def test_numbers_above_their_limits_are_refused_naming_them(capsys, key, value):
+    from dronefleet.replenishment.params import UPPER_LIMITS
+
+    refused(capsys, ["bounds", str(REPLENISHMENT_TOML), "--set", f"{key}={value}"],
+            f"{key} = ", f"must be <= {UPPER_LIMITS[key][0]:g}")
+
+
+# --------------------------------------------------------------------------- run size, per trial too
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Any seeding or simulating fails the test: refusals come before any work."""
+    import importlib
+
+    simulate = importlib.import_module("dronefleet.replenishment.simulate")
+    monkeypatch.setattr(simulate, "_rng_states", lambda seeds: pytest.fail("trials were seeded"))
+    monkeypatch.setattr(simulate.kernel, "run_trials", lambda *args: pytest.fail("the kernel ran"))
+
+
+@pytest.mark.parametrize("changes, fragments", [
+    # 5e6 one-tick trials passed (3.5e7 robot-ticks) and then seeded for minutes in ~3 GB
+    ({"trials": 5_000_000, "ticks": 1}, ["trials = 5000000", "must be <= 100000"]),
+    # 9.6e8 robot-ticks of ticks, and 1e5 trials' set-ups on top
+    ({"trials": 100_000, "ticks": 800, "sample_every": 800},
+     ["robot-ticks", "trials 100000", "ticks 800 x 12 robots", "per trial's set-up", "at most 1e+09"]),
+    ({"trials": 50_000, "ticks": 2000, "n_chargers": 1}, ["GB", "trials 50000", "201 time-series rows", "2 GB"]),
+    ({"trials": 100, "ticks": 150_000, "sample_every": 1}, ["GB", "150001 time-series rows", "sample_every"]),
+    ({"trials": 1000, "ticks": 100_000, "sample_every": 100}, ["robot-ticks", "lower trials or ticks"]),
+])
+def test_a_run_too_large_counting_each_trials_set_up_is_refused_before_any_work(tmp_path, capsys, no_work,
+                                                                               changes, fragments):
+    args = [arg for key, value in changes.items() for arg in ("--set", f"{key}={value}")]
+    refused(capsys, ["run", str(REPLENISHMENT_TOML), *args, "--out", str(tmp_path / "out")], *fragments)
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(ConfigError, match=re.escape(fragments[-1])):
+        dronefleet.run("replenishment", **changes)
+
+
+def test_each_grid_cell_of_a_sweep_is_held_to_the_run_limits_before_the_sweep_starts(tmp_path, capsys, no_work):
+    path = tmp_path / "cells.toml"
+    path.write_text('[sweep]\nscenario = "replenishment"\n[set]\nticks = 800\nsample_every = 800\n[grid]\ntrials = [10, 100000]\n')
+    results = tmp_path / "results"
+    refused(capsys, ["sweep", "run", str(path), "--results", str(results)], "[grid] at trials = 100000",
+            "robot-ticks")
+    assert not results.exists()

@@ -272,3 +272,31 @@ def test_each_grid_cell_of_a_sweep_is_held_to_the_run_limits_before_the_sweep_st
     refused(capsys, ["sweep", "run", str(path), "--results", str(results)], "[grid] at trials = 100000",
             "robot-ticks")
     assert not results.exists()
+
+
+# --------------------------------------------------------------------------- delivery limits
+
+def test_every_delivery_number_has_a_finite_upper_limit():
+    from dronefleet.delivery.config import PARAMETERS
+
+    numbers = {name: p.constraint for name, p in PARAMETERS.items() if p.type in (int, float, tuple)}
+    assert all(c.right is not None and math.isfinite(c.right) for c in numbers.values()), numbers
+
+
+@pytest.mark.parametrize("key", ["tau_minutes", "record_interval_s", "advert_interval_s", "eta0"])
+def test_delivery_periods_and_rates_above_their_limits_are_refused(tmp_path, capsys, key):
+    # tau_minutes = 1e308 was taken: tau_s = inf
+    refused(capsys, ["run", "--set", f"{key}=1e308", "--out", str(tmp_path / "out")], f"{key} = 1e+308",
+            "out of range: allowed")
+
+
+@pytest.mark.parametrize("key", ["tau_minutes", "record_interval_s", "advert_interval_s", "eta0"])
+def test_a_short_delivery_run_at_each_new_limit_is_finite_without_a_warning(key):
+    import warnings
+
+    from dronefleet.delivery.config import PARAMETERS
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        summary = dronefleet.run(horizon_weeks=0.02, n_uavs=3, **{key: PARAMETERS[key].constraint.right}).summary
+    assert summary.orders_arrived.iloc[0] >= 0 and math.isfinite(summary.backlog_age_s.iloc[0])

@@ -300,3 +300,16 @@ def test_a_short_delivery_run_at_each_new_limit_is_finite_without_a_warning(key)
         warnings.simplefilter("error")
         summary = dronefleet.run(horizon_weeks=0.02, n_uavs=3, **{key: PARAMETERS[key].constraint.right}).summary
     assert summary.orders_arrived.iloc[0] >= 0 and math.isfinite(summary.backlog_age_s.iloc[0])
+
+
+# --------------------------------------------------------------------------- output paths
+
+@pytest.mark.parametrize("name, reason", [("x" * 5000, "File name too long"), ("bad\0name", "NUL byte")])
+def test_an_out_folder_no_file_system_can_name_is_refused_in_one_line(tmp_path, capsys, name, reason):
+    if "\0" not in name:  # argv cannot hold a NUL byte
+        refused(capsys, ["run", str(REPLENISHMENT_TOML), "--set", "trials=1", "--set", "ticks=10",
+                         "--out", str(tmp_path / name)], "--out '", "cannot name a folder")
+    run = dronefleet.run("replenishment", trials=1, ticks=10)
+    with pytest.raises(ConfigError, match="cannot name a folder"):
+        run.save(tmp_path / name)
+    assert not any(tmp_path.iterdir())

@@ -120,23 +120,38 @@ def _leaf(value: Any, limit: int) -> str:
         return f"<{type(value).__name__}>"
 
 
+_SCALARS = frozenset((int, float, str, bool, type(None)))
+
+
 def too_deep(value: Any, limit: int = MAX_DEPTH) -> str | None:
     """The path (``a.b[3].c``) of the first table or list in ``value`` nested more than ``limit``
     deep (``value`` itself, if a table or list, is 1 deep), or None. Without recursion; stops at
     the first such one, so a value holding itself is answered too."""
-    todo = [(value, "", 0)]
+    todo = [(value, 0, None)]   # (item, its depth, (its parent's entry, its key or index))
     while todo:
-        item, path, depth = todo.pop()
+        entry = todo.pop()
+        item, depth, _ = entry
+        if type(item) in _SCALARS:  # most of a big value: spared the slower Mapping check
+            continue
         if isinstance(item, Mapping):
-            children = [(v, f"{path}.{_key_text(k)}" if path else _key_text(k)) for k, v in item.items()]
+            children = item.items()
         elif isinstance(item, (list, tuple, set, frozenset)):
-            children = [(v, f"{path}[{n}]") for n, v in enumerate(item)]
+            children = enumerate(item)
         else:
             continue
         if depth + 1 > limit:
-            return path
-        todo.extend((child, where, depth + 1) for child, where in reversed(children))
+            return _path(entry)
+        todo.extend([(child, depth + 1, (entry, key)) for key, child in children][::-1])
     return None
+
+
+def _path(entry: tuple) -> str:
+    """``a.b[3]`` of a :func:`too_deep` entry, from its parents' keys (an index of a list in brackets)."""
+    parts = []
+    while entry[2] is not None:
+        entry, key = entry[2]
+        parts.append(f".{_key_text(key)}" if isinstance(entry[0], Mapping) else f"[{key}]")
+    return "".join(reversed(parts)).removeprefix(".")
 
 
 def _key_text(key: Any) -> str:

@@ -76,7 +76,7 @@ def _changes(scenario: Scenario, fixed: Mapping[str, Any] | None, overrides: Map
         name = scenario.resolve_key(key)  # ConfigError listing the allowed keys
         check_depth(value, "", key)
         if name in changes:
-            raise ConfigError(f"{name} is given twice (as {key!r} and before, in set, a keyword or seed)", [name])
+            raise ConfigError(f"{name} is given twice (as {_show(key)} and before, in set, a keyword or seed)", [name])
         changes[name] = value
     return changes
 
@@ -243,7 +243,7 @@ def _grid(grid: Any) -> dict | list[dict]:
         if not isinstance(table, Mapping):
             raise ConfigError(f"grid={_show(grid)}: expected a dict of config keys to lists of values, "
                               "e.g. {'rule': ['least_confident', 'random']}, or a list of such dicts")
-        return {key: _bounded_list(values, f"grid[{key!r}]", "values") if isinstance(values, (tuple, range))
+        return {key: _bounded_list(values, f"grid[{_show(key)}]", "values") if isinstance(values, (tuple, range))
                 else values for key, values in table.items()}
 
     return [product(table) for table in grid] if isinstance(grid, list) else product(grid)

@@ -124,6 +124,9 @@ TASK_VARIABLES = (("SLURM_ARRAY_TASK_ID", 0), ("PBS_ARRAY_INDEX", 0), ("SGE_TASK
 #: is built, so a typo in a seed count is refused at once, not after hours or a MemoryError.
 MAX_RUNS = 100_000
 
+#: Longest sweep name: it names a folder and its job-array script (file names hold 255 bytes).
+MAX_NAME = 100
+
 _SECTIONS = ("sweep", "set", "grid")
 _SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task", SCENARIO_KEY)
 _SEED_RANGE_KEYS = ("start", "count")
@@ -417,15 +420,15 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     _check_names(head, _SWEEP_KEYS, f"{path}: [sweep]")
 
     name = head.get("name", path.stem)
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise SweepError(f"{path}: [sweep] name = {name!r}: use letters, digits, '.', '_' and '-', "
-                         "starting with a letter or digit (it names the results directory)")
+    if not isinstance(name, str) or not _NAME.fullmatch(name) or len(name) > MAX_NAME:
+        raise SweepError(f"{path}: [sweep] name = {_show(name)}: use up to {MAX_NAME} letters, digits, '.', '_' "
+                         "and '-', starting with a letter or digit (it names the results directory)")
     runs_per_task = head.get("runs_per_task", 10)
     if not isinstance(runs_per_task, int) or isinstance(runs_per_task, bool) or runs_per_task < 1:
-        raise SweepError(f"{path}: [sweep] runs_per_task must be an integer >= 1, got {runs_per_task!r}")
+        raise SweepError(f"{path}: [sweep] runs_per_task must be an integer >= 1, got {_show(runs_per_task)}")
     base = head.get("base")
     if base is not None and not isinstance(base, str):
-        raise SweepError(f"{path}: [sweep] base must be a path (string), got {base!r}")
+        raise SweepError(f"{path}: [sweep] base must be a path (string), got {_show(base)}")
     base = None if base is None else path.parent / base
     scenario = _scenario(head, base, path)
     key = scenario.seed_key

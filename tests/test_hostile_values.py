@@ -40,6 +40,7 @@ def refused(capsys, args, *fragments):
     err = capsys.readouterr().err
     assert code == 2, err[-2000:]
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err[-2000:]
+    assert len(err) < 2000, err[:2000]   # a value is never printed whole
     assert all(fragment in err for fragment in fragments), err
 
 
@@ -313,3 +314,20 @@ def test_an_out_folder_no_file_system_can_name_is_refused_in_one_line(tmp_path, 
     with pytest.raises(ConfigError, match="cannot name a folder"):
         run.save(tmp_path / name)
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("head, fragment", [
+    (f'name = "{"x" * 100_000}"', "name = 'xxx"), (f"runs_per_task = {'9' * 100_000}", "cannot parse"),
+    (f'runs_per_task = "{"x" * 100_000}"', "runs_per_task must be an integer >= 1, got 'xxx"),
+    (f"base = [{', '.join(['1'] * 100_000)}]", "base must be a path (string), got [1, 1"),
+])
+def test_sweep_heads_of_huge_values_are_refused_in_a_short_line(tmp_path, capsys, head, fragment):
+    path = tmp_path / "huge.toml"
+    path.write_text(f'[sweep]\nscenario = "replenishment"\n{head}\n[grid]\nticks = [10]\n')
+    refused(capsys, ["sweep", "plan", str(path), "--results", str(tmp_path / "results")], fragment)
+
+
+def test_grid_keys_of_huge_integers_are_named_in_a_short_line():
+    with pytest.raises(ConfigError, match="more than 100,000 values|not a string") as error:
+        dronefleet.sweep({BIG: range(10**6)}, base="replenishment")
+    assert len(str(error.value)) < 1000

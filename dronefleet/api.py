@@ -23,6 +23,7 @@ or a table is asked for.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import json
 import os
@@ -32,7 +33,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import scenarios
-from .config import ConfigError, _show
+from .config import ConfigError, _show, check_depth
 from .scenarios import Scenario
 from .sweeps import MAX_RUNS, available_cpus, collect, run_sweep, sweep_of_document
 
@@ -73,8 +74,9 @@ def _changes(scenario: Scenario, fixed: Mapping[str, Any] | None, overrides: Map
             raise ConfigError(f"config key {_show(key)} is not a string: keys are names such as 'tau_minutes' "
                               "or 'orders.tau_minutes'")
         name = scenario.resolve_key(key)  # ConfigError listing the allowed keys
+        check_depth(value, "", key)
         if name in changes:
-            raise ConfigError(f"{name} is given twice (as {key!r} and before, in set, a keyword or seed)", [name])
+            raise ConfigError(f"{name} is given twice (as {_show(key)} and before, in set, a keyword or seed)", [name])
         changes[name] = value
     return changes
 
@@ -241,7 +243,7 @@ def _grid(grid: Any) -> dict | list[dict]:
         if not isinstance(table, Mapping):
             raise ConfigError(f"grid={_show(grid)}: expected a dict of config keys to lists of values, "
                               "e.g. {'rule': ['least_confident', 'random']}, or a list of such dicts")
-        return {key: _bounded_list(values, f"grid[{key!r}]", "values") if isinstance(values, (tuple, range))
+        return {key: _bounded_list(values, f"grid[{_show(key)}]", "values") if isinstance(values, (tuple, range))
                 else values for key, values in table.items()}
 
     return [product(table) for table in grid] if isinstance(grid, list) else product(grid)
@@ -318,7 +320,9 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     if set is not None and not isinstance(set, Mapping):
         raise ConfigError(f"set={_show(set)}: expected a dict of config keys to values, e.g. {{'horizon_weeks': 1}}")
     document = {"sweep": head, "set": dict(set or {}), "grid": _grid(grid)}
-    planned = sweep_of_document(document, Path(SWEEP_LABEL), json.dumps(document, default=str))
+    planned = sweep_of_document(document, Path(SWEEP_LABEL), "")
+    # kept in collected.parquet; only now, when every key and value is known to be one a config holds
+    planned = dataclasses.replace(planned, text=json.dumps(document, default=str))
     with tempfile.TemporaryDirectory(prefix="dronefleet-sweep-") as folder:
         out = Path(folder) / planned.name
         _, failures = run_sweep(planned, out, planned.runs, jobs or available_cpus())

@@ -9,6 +9,7 @@ import argparse
 import hashlib
 import logging
 import os
+import stat
 import sys
 import time
 from collections.abc import Iterable
@@ -16,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from . import console, provenance, scenarios, sweeps
-from .config import ConfigError
+from .config import ConfigError, _show
 from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, check_output_file, probe_folders, writing
 
@@ -72,7 +73,14 @@ def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: I
 
     if out.name in ("", ".."):  # "." and "/" normalised have no name: no sibling to write first
         raise OutputError(f"--out {str(out)!r} must name a folder of its own, e.g. results/runs/mine")
-    if out.is_symlink():  # the folder is replaced by a rename, which would replace the link, not its target
+    try:
+        link = stat.S_ISLNK(os.lstat(out).st_mode)
+    except (FileNotFoundError, NotADirectoryError):
+        link = False
+    except (OSError, ValueError) as error:  # a name too long, a NUL byte: no folder can be called that
+        reason = getattr(error, "strerror", None) or "it holds a NUL byte"
+        raise OutputError(f"--out {_show(str(out))} cannot name a folder: {reason}") from None
+    if link:  # the folder is replaced by a rename, which would replace the link, not its target
         raise OutputError(f"--out {str(out)!r} is a symbolic link; give the folder itself")
     if save_fleet is not None and Path(os.path.abspath(save_fleet)).is_relative_to(os.path.abspath(out)):
         raise OutputError(f"--save-fleet {str(save_fleet)!r} lies inside --out {str(out)!r}, which is written "

@@ -6,16 +6,20 @@ config and sweep file is read the same way and every refusal reads alike:
 
 * :class:`ConfigError`, the one exception for bad input (a one-line message; exit code 2);
 * :func:`read_toml`, the one reader of TOML files (regular UTF-8 files of at most
-  :data:`MAX_CONFIG_BYTES`, so a pipe or a huge file is refused, not waited on or read);
+  :data:`MAX_CONFIG_BYTES`, so a pipe or a huge file is refused, not waited on or read,
+  nested at most :data:`MAX_DEPTH` deep);
+* :func:`check_depth`, the refusal of a value nested deeper than :data:`MAX_DEPTH` (``--set``,
+  the Python API), so that no check or message recurses through thousands of levels;
 * :data:`SCENARIO_KEY`, the top-level key that names a config's scenario;
 * :func:`shipped_config`, the path of a config or sweep file shipped with the package;
 * ``_parse_override`` (``--set key=value``), ``_show``, ``_name`` and ``_suggest`` (values,
-  names and "did you mean" in messages).
+  names and "did you mean" in messages; ``_show`` never recurses and stops at the characters shown).
 """
 
 from __future__ import annotations
 
 import difflib
+import itertools
 import importlib.resources
 import os
 import stat
@@ -23,9 +27,10 @@ import tomllib
 from os import PathLike
 from pathlib import Path
 from typing import Any
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 
-__all__ = ["ConfigError", "MAX_CONFIG_BYTES", "SCENARIO_KEY", "read_toml", "shipped_config"]
+__all__ = ["ConfigError", "MAX_CONFIG_BYTES", "MAX_DEPTH", "SCENARIO_KEY", "check_depth", "read_toml", "shipped_config",
+           "too_deep"]
 
 #: Largest config file read [bytes]; real ones are a few KB.
 MAX_CONFIG_BYTES = 1_000_000
@@ -44,13 +49,123 @@ class ConfigError(ValueError):
         self.keys = tuple(keys)
 
 
-def _show(value: Any) -> str:
-    """repr of a value, cut to 60 characters: a message never prints a whole big value."""
+#: Deepest nesting of tables and lists in a config or sweep file, or in a value given by ``--set`` or
+#: the Python API: a sweep's ``[[grid]]`` tables of sections of lists of values are 5 deep; TOML's
+#: dotted keys (``trials.a.a.a...``) and Python lists can nest thousands deep, past what any
+#: recursive check or message (``repr``, ``==``, JSON) can take.
+MAX_DEPTH = 8
+
+
+def _show(value: Any, limit: int = 60) -> str:
+    """repr of a value, cut to ``limit`` characters: a message never prints a whole big value.
+
+    Built piece by piece from the front, without recursion, and only as far as shown: a value
+    nested thousands deep, holding itself or of millions of items costs its first characters.
+    """
+    if type(value) is int:
+        try:
+            repr(value)
+        except ValueError:  # an int too long to print (sys.get_int_max_str_digits)
+            return f"an integer of {value.bit_length()} bits"
+    opening = {list: ("[", "]"), tuple: ("(", ")"), dict: ("{", "}"), set: ("{", "}"),
+               frozenset: ("frozenset({", "})")}
+    pieces, length, todo = [], 0, [value]   # todo: values to show, or text, the next last
+    while todo and length <= limit:
+        item = todo.pop()
+        if isinstance(item, _Text):
+            text = item.text
+        elif type(item) in opening and item:
+            start, end = opening[type(item)]
+            items = list(itertools.islice(item.items() if type(item) is dict else item, limit))
+            more = len(item) > len(items)
+            todo.append(_Text(("," if type(item) is tuple and len(item) == 1 else "") + (", ..." if more else "")
+                              + end))
+            for n, element in enumerate(reversed(items)):
+                if n:
+                    todo.append(_Text(", "))
+                if type(item) is dict:
+                    todo.extend((element[1], _Text(": "), element[0]))
+                else:
+                    todo.append(element)
+            text = start
+        else:
+            text = _leaf(item, limit)
+        pieces.append(text)
+        length += len(text)
+    text = "".join(pieces)
+    return text if len(text) <= limit and not todo else text[:limit - 3] + "..."
+
+
+class _Text:
+    """Literal text in :func:`_show`'s work list (as opposed to a value to show)."""
+
+    __slots__ = ("text",)
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+
+
+def _leaf(value: Any, limit: int) -> str:
+    """repr of a value :func:`_show` does not take apart, at most about ``limit`` characters long."""
+    if isinstance(value, str) and len(value) > limit:
+        return repr(value[:limit])
+    if type(value) is int:
+        try:
+            return repr(value)
+        except ValueError:
+            return f"<an integer of {value.bit_length()} bits>"
     try:
-        text = repr(value)
-    except ValueError:  # an int too long to print (sys.get_int_max_str_digits)
-        return f"an integer of {value.bit_length()} bits"
-    return text if len(text) <= 60 else text[:57] + "..."
+        return repr(value)
+    except Exception:  # an object whose repr fails (or recurses too deep): its type is what we know
+        return f"<{type(value).__name__}>"
+
+
+_SCALARS = frozenset((int, float, str, bool, type(None)))
+
+
+def too_deep(value: Any, limit: int = MAX_DEPTH) -> str | None:
+    """The path (``a.b[3].c``) of the first table or list in ``value`` nested more than ``limit``
+    deep (``value`` itself, if a table or list, is 1 deep), or None. Without recursion; stops at
+    the first such one, so a value holding itself is answered too."""
+    todo = [(value, 0, None)]   # (item, its depth, (its parent's entry, its key or index))
+    while todo:
+        entry = todo.pop()
+        item, depth, _ = entry
+        if type(item) in _SCALARS:  # most of a big value: spared the slower Mapping check
+            continue
+        if isinstance(item, Mapping):
+            children = item.items()
+        elif isinstance(item, (list, tuple, set, frozenset)):
+            children = enumerate(item)
+        else:
+            continue
+        if depth + 1 > limit:
+            return _path(entry)
+        todo.extend([(child, depth + 1, (entry, key)) for key, child in children][::-1])
+    return None
+
+
+def _path(entry: tuple) -> str:
+    """``a.b[3]`` of a :func:`too_deep` entry, from its parents' keys (an index of a list in brackets)."""
+    parts = []
+    while entry[2] is not None:
+        entry, key = entry[2]
+        parts.append(f".{_key_text(key)}" if isinstance(entry[0], Mapping) else f"[{key}]")
+    return "".join(reversed(parts)).removeprefix(".")
+
+
+def _key_text(key: Any) -> str:
+    return key if isinstance(key, str) and len(key) <= 60 else _show(key)
+
+
+def check_depth(value: Any, where: str, what: str = "") -> None:
+    """ConfigError, naming ``where`` and the key, if ``value`` nests tables and lists deeper than
+    :data:`MAX_DEPTH` (``what`` names ``value`` itself in the message, e.g. ``"--set trials"``)."""
+    path = too_deep(value)
+    if path is not None:
+        key = (what + ("." if what and path and not path.startswith("[") else "") + path) or "the value"
+        raise ConfigError(f"{where}{_name(key)} nests tables and lists more than {MAX_DEPTH} deep; "
+                          "a config value is a number, a string or a list of numbers")
 
 
 def _name(name: str) -> str:
@@ -85,6 +200,7 @@ def _parse_override(text: Any, resolve: Callable[[str], str]) -> tuple[str, Any]
         value = doc["v"] if list(doc) == ["v"] else raw
     except (ValueError, RecursionError):  # not a TOML value (TOMLDecodeError, huge int): a bare string
         value = raw
+    check_depth(value, "", f"--set {key}")
     return name, value
 
 
@@ -92,17 +208,22 @@ def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dic
     """The text and TOML document of the ``kind`` (config or sweep file) in ``path``.
 
     ConfigError, naming the file, if it is not a regular file (a pipe would block), cannot be
-    read, is larger than :data:`MAX_CONFIG_BYTES`, is not UTF-8 or is not TOML.
+    read, is larger than :data:`MAX_CONFIG_BYTES`, is not UTF-8, is not TOML or nests tables and
+    lists deeper than :data:`MAX_DEPTH`.
     """
     where = f"{kind} {str(path)!r}"
     try:
         # Only a regular file: opening a pipe would wait for a writer for ever.
-        if not stat.S_ISREG(os.stat(path).st_mode):
-            raise ConfigError(f"{where} is not a regular file (a folder, pipe or device); give a TOML file")
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the file may have grown
+        regular = stat.S_ISREG(os.stat(path).st_mode)
+        if regular:
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_CONFIG_BYTES + 1)  # read no further: the file may have grown
     except OSError as e:
         raise ConfigError(f"cannot read {where}: {e.strerror or e}{_shipped_hint(path, e)}") from None
+    except ValueError:  # a NUL byte in the path, which no file name holds
+        raise ConfigError(f"{where} is not a path: it holds a NUL byte") from None
+    if not regular:
+        raise ConfigError(f"{where} is not a regular file (a folder, pipe or device); give a TOML file")
     if len(data) > MAX_CONFIG_BYTES:
         raise ConfigError(f"{where} is larger than {MAX_CONFIG_BYTES} bytes; a {kind} is a few KB of TOML")
     try:
@@ -111,11 +232,13 @@ def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dic
         raise ConfigError(f"{where} is not UTF-8 text (byte {data[e.start]:#04x} at offset {e.start}); "
                           "save it as UTF-8") from None
     try:
-        return text, tomllib.loads(text)
+        document = tomllib.loads(text)
     except ValueError as e:  # TOMLDecodeError, or an integer of too many digits
         raise ConfigError(f"cannot parse {where}: {e}") from None
     except RecursionError:
         raise ConfigError(f"cannot parse {where}: values nested too deeply") from None
+    check_depth(document, f"{where}: ")  # dotted keys nest without limit: a.a.a... = 1
+    return text, document
 
 
 def _shipped_hint(path: str | PathLike, error: OSError) -> str:

@@ -109,7 +109,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from . import console, scenarios
-from .config import SCENARIO_KEY, ConfigError, read_toml
+from .config import SCENARIO_KEY, ConfigError, _show, check_depth, read_toml
 from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
@@ -130,6 +130,9 @@ TASK_VARIABLES = (("SLURM_ARRAY_TASK_ID", 0), ("PBS_ARRAY_INDEX", 0), ("SGE_TASK
 #: The most runs one sweep may hold: checked (from the grid's sizes) before any run's config
 #: is built, so a typo in a seed count is refused at once, not after hours or a MemoryError.
 MAX_RUNS = 100_000
+
+#: Longest sweep name: it names a folder and its job-array script (file names hold 255 bytes).
+MAX_NAME = 100
 
 _SECTIONS = ("sweep", "set", "grid")
 _SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task", SCENARIO_KEY)
@@ -236,6 +239,11 @@ def _parameters(table, scenario: Scenario, where: str) -> dict:
         raise SweepError(f"{where} must be a table of key = value")
     out = {}
     for key, value in table.items():
+        # keys from the Python API may be anything: a key is a name, never joined or resolved otherwise
+        for name in (key, *(value if isinstance(value, dict) else ())):
+            if not isinstance(name, str):
+                raise SweepError(f"{where}: key {_show(name)} is not a string: keys are names such as "
+                                 "'tau_minutes' or 'orders.tau_minutes'")
         entries = [(f"{key}.{k}", v) for k, v in value.items()] if isinstance(value, dict) else [(key, value)]
         for text, v in entries:
             try:
@@ -252,18 +260,46 @@ def _parameters(table, scenario: Scenario, where: str) -> dict:
 
 
 def _repeated(values: list):
-    """The first value that equals an earlier one (15 equals 15.0), or None; in one pass over
-    hashable values, as a grid of 100,000 values must not take minutes to check."""
+    """The first value that equals an earlier one (15 equals 15.0 and True, [15] equals [15.0], as
+    Python's ``==`` has them), or None; in one pass, lists too, as a grid of 100,000 values must
+    not take minutes to check. The values are nested at most :data:`~dronefleet.config.MAX_DEPTH` deep."""
     seen = set()  # equal numbers hash alike: 15 and 15.0 meet here too
-    for i, value in enumerate(values):
-        try:
-            if value in seen:
-                return value
-            seen.add(value)
-        except TypeError:  # unhashable (a list): compared with every earlier value
-            if value in values[:i]:
-                return value
+    for value in values:
+        key = _hashable(value)
+        if key in seen:
+            return value
+        seen.add(key)
     return None
+
+
+class _Container:
+    """Tags :func:`_hashable`'s stand-ins for lists and dicts: no value given can equal them."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+
+_LIST, _DICT, _OTHER = _Container("list"), _Container("dict"), _Container("unhashable")
+
+
+def _hashable(value):
+    """A hashable stand-in for ``value`` that equals another's exactly when the values are ``==``:
+    a list by its items' stand-ins (never equal to a tuple, as ``[1] != (1,)``), a dict by its
+    items, a set as a frozenset. Another unhashable value (from the API: a bytearray, an array)
+    stands for itself alone; no config holds one, and its run is refused naming it."""
+    if isinstance(value, list):
+        return _LIST, tuple(_hashable(v) for v in value)
+    if isinstance(value, tuple):
+        return tuple(_hashable(v) for v in value)
+    if isinstance(value, dict):
+        return _DICT, frozenset((k, _hashable(v)) for k, v in value.items())
+    if isinstance(value, set):
+        return frozenset(value)
+    try:
+        hash(value)
+    except TypeError:
+        return _OTHER, id(value)
+    return value
 
 
 def _products(grid, scenario: Scenario, where: str) -> list[tuple[str, dict[str, list]]]:
@@ -288,12 +324,12 @@ def _products(grid, scenario: Scenario, where: str) -> list[tuple[str, dict[str,
                                  "(a partition value is one number or string); set it in [set] or the base",
                                  [name])
             if not isinstance(values, list):
-                raise SweepError(f"{where}: {label}: {name} must be a list of values, got {values!r} "
+                raise SweepError(f"{where}: {label}: {name} must be a list of values, got {_show(values)} "
                                  "(a fixed value goes in [set])", [name])
             if not values:
                 raise SweepError(f"{where}: {label}: {name} is an empty list: it would make no runs", [name])
             if (value := _repeated(values)) is not None:
-                raise SweepError(f"{where}: {label}: {name} lists {value!r} more than once", [name])
+                raise SweepError(f"{where}: {label}: {name} lists {_show(value)} more than once", [name])
         # [grid]'s canonical key order: a file's key order changes neither its runs nor its tasks
         products.append((label, dict(sorted(product.items())) if canonical else product))
     return products
@@ -306,17 +342,17 @@ def _seeds(value, where: str) -> tuple:
         start, count = value.get("start", 0), value.get("count")
         if not all(isinstance(x, int) and not isinstance(x, bool) for x in (start, count)) or count < 1:
             raise SweepError(f"{where}: a range is {{ start = <integer>, count = <integer >= 1> }}, "
-                             f"got {value!r}", ["seed"])
+                             f"got {_show(value)}", ["seed"])
         if count > MAX_RUNS:  # before the tuple is built: a count of 10**12 would exhaust memory
             raise SweepError(f"{where}: count = {count} seeds is more than a sweep may run: "
                              f"at most {MAX_RUNS:,} runs per sweep", ["seed"])
         return tuple(range(start, start + count))
     if isinstance(value, list) and value:
         if (seed := _repeated(value)) is not None:
-            raise SweepError(f"{where}: seed {seed!r} is listed more than once", ["seed"])
+            raise SweepError(f"{where}: seed {_show(seed)} is listed more than once", ["seed"])
         return tuple(value)
     raise SweepError(f"{where}: give a non-empty list (seeds = [0, 1, 2]) or a range "
-                     f"(seeds = {{ start = 0, count = 20 }}), got {value!r}", ["seed"])
+                     f"(seeds = {{ start = 0, count = 20 }}), got {_show(value)}", ["seed"])
 
 
 def _scenario(head: dict, base: Path | None, path: Path) -> Scenario:
@@ -379,6 +415,11 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     memory, as :func:`dronefleet.api.sweep` does): ``path`` names it in messages, gives the
     default name (its stem) and the folder ``[sweep] base`` is relative to; ``text`` is kept
     in ``collected.parquet``. Raises SweepError as :func:`load_sweep` does."""
+    try:  # a document built in Python (dronefleet.sweep) has not been through read_toml
+        for value, what in ((doc, ""), (changes, "changes"), (seeds, "seeds")):
+            check_depth(value, f"{path}: ", what)
+    except ConfigError as error:
+        raise SweepError(str(error)) from None
     _check_names(doc, _SECTIONS, f"{path}: sections")
     head = doc.get("sweep", {})
     if not isinstance(head, dict):
@@ -386,15 +427,15 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     _check_names(head, _SWEEP_KEYS, f"{path}: [sweep]")
 
     name = head.get("name", path.stem)
-    if not isinstance(name, str) or not _NAME.fullmatch(name):
-        raise SweepError(f"{path}: [sweep] name = {name!r}: use letters, digits, '.', '_' and '-', "
-                         "starting with a letter or digit (it names the results directory)")
+    if not isinstance(name, str) or not _NAME.fullmatch(name) or len(name) > MAX_NAME:
+        raise SweepError(f"{path}: [sweep] name = {_show(name)}: use up to {MAX_NAME} letters, digits, '.', '_' "
+                         "and '-', starting with a letter or digit (it names the results directory)")
     runs_per_task = head.get("runs_per_task", 10)
     if not isinstance(runs_per_task, int) or isinstance(runs_per_task, bool) or runs_per_task < 1:
-        raise SweepError(f"{path}: [sweep] runs_per_task must be an integer >= 1, got {runs_per_task!r}")
+        raise SweepError(f"{path}: [sweep] runs_per_task must be an integer >= 1, got {_show(runs_per_task)}")
     base = head.get("base")
     if base is not None and not isinstance(base, str):
-        raise SweepError(f"{path}: [sweep] base must be a path (string), got {base!r}")
+        raise SweepError(f"{path}: [sweep] base must be a path (string), got {_show(base)}")
     base = None if base is None else path.parent / base
     scenario = _scenario(head, base, path)
     key = scenario.seed_key
@@ -436,7 +477,7 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     for label, product in products:
         for point in itertools.product(*product.values()):
             changes = dict(zip(product, point))
-            where = f"{label} at {', '.join(f'{k} = {v!r}' for k, v in changes.items())}"
+            where = f"{label} at {', '.join(f'{k} = {_show(v)}' for k, v in changes.items())}"
             try:
                 at_point = scenario.replace(config, changes)
             except ConfigError as error:

@@ -75,7 +75,9 @@ def test_bounds_refuse_parameters_where_they_do_not_exist():
     (dict(trials=0), "trials"),
     (dict(ticks=6000.0), "ticks"),
     (dict(work_ratio=float("nan")), "work_ratio"),
-    (dict(ticks=10**9, trials=50), "time-series rows"),
+    (dict(ticks=10**9, trials=50), "ticks"),
+    (dict(ticks=10**6, trials=50, sample_every=1), "time-series rows"),
+    (dict(work_ratio=1e308), "work_ratio"),
 ])
 def test_bad_parameters_are_refused_with_a_one_line_message(changes, name):
     with pytest.raises(ParamsError, match=name) as info:

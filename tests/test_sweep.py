@@ -111,7 +111,7 @@ def test_changes_and_seeds_make_a_variant_of_a_sweep_file():
     (GOOD + "[set]\nrule = 'random'\n", "rule is both fixed ([set] or changes) and in [grid]"),
     (GOOD.replace('"random"]', '"nope"]'),
      "[grid] at rule = 'nope': auction.rule = 'nope' is not a registered winner rule"),
-    (GOOD + "tau_minutes = [15, -5]\n", "orders.tau_minutes = -5 is out of range: allowed > 0"),
+    (GOOD + "tau_minutes = [15, -5]\n", "orders.tau_minutes = -5 is out of range: allowed (0, 1.008e+07]"),
     (GOOD + "soh_min = [0.9]\n[set]\nsoh_max = 0.8\n", "fleet.soh_min = 0.9 must be <= fleet.soh_max = 0.8"),
     (GOOD + "[set]\nn_uavs = 2.5\n", "[set]: fleet.n_uavs must be an integer"),
     (GOOD.replace("seeds = [0, 1]", "seeds = []"), "give a non-empty list"),

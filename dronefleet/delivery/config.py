@@ -32,7 +32,8 @@ Decisions
 * Whatever drives memory or time is bounded before any work: by a parameter's
   range (``seed`` fits int64, ``n_uavs`` and weeks fit int16 columns, physical
   ranges for masses, distances, energy parameters and the feature scaling, so
-  that no power, charging time or feature overflows; ``advert_interval_s >= 1 ms``) or by the
+  that no power, charging time or feature overflows; ``advert_interval_s >= 1 ms``; periods
+  at most the longest horizon, 1000 weeks, so that none is infinite in seconds) or by the
   run's size (:func:`run_size`, limits in :data:`RUN_LIMITS`), whose message
   gives the figure, e.g. "the run would hold ~3.2e+10 orders (horizon 8 weeks /
   tau 1e-09 min); at most 1e+07 allowed".
@@ -190,13 +191,13 @@ def _p(section, default, type_, constraint, doc, length=0):
                  metadata={"param": Param(section, type_, constraint, doc, length)})
 
 
-_POSITIVE = Interval(0, None, "neither")
-_NON_NEGATIVE = Interval(0, None, "left")
-_AT_LEAST_ONE = Interval(1, None, "left")
 _FRACTION = Interval(0, 1, "right")        # (0, 1]
 # Physical ranges, wide enough for any delivery UAV, so that no power, time or feature overflows.
 _MASS_KG = Interval(0, 1e4)
 _DISTANCE_M = Interval(0, 1e7, "right")
+#: A period [s] at most the longest horizon (1000 weeks): a longer one acts as never.
+_LONGEST_S = 1000 * 604_800.0
+_PERIOD_S = Interval(0, _LONGEST_S, "right")
 
 
 # --------------------------------------------------------------------------
@@ -217,13 +218,13 @@ class Config:
                    "master seed from which every random stream is derived (an int64 column)")
     horizon_weeks: float = _p("run", 8.0, float, Interval(0, 1000, "right"),
                               "operating period T [weeks] (weeks are int16 columns)")
-    record_interval_s: float = _p("run", 900.0, float, _POSITIVE,
+    record_interval_s: float = _p("run", 900.0, float, _PERIOD_S,
                                   "sampling period of the recorded time series [s]")
     fleet_file: str = _p("run", "", str, AnyText(),
                          "saved fleet to start from (parquet; '{seed}' is replaced by the seed); "
                          "'' = a new fleet")
     # [orders]
-    tau_minutes: float = _p("orders", 15.0, float, _POSITIVE,
+    tau_minutes: float = _p("orders", 15.0, float, Interval(0, _LONGEST_S / 60.0, "right"),
                             "mean inter-arrival time of orders, tau [min]")
     mass_min_kg: float = _p("orders", 0.5, float, _MASS_KG,
                             "lower bound of the uniform parcel mass [kg]")
@@ -267,15 +268,16 @@ class Config:
                         "rule that resolves the immediate bids under 'reservation'")
     theta: float = _p("auction", 50.0, float, Interval(0, 100, "both"),
                       "SoC threshold of the 'threshold' rule [%]")
-    advert_interval_s: float = _p("auction", 2.0, float, Interval(1e-3, None),
+    advert_interval_s: float = _p("auction", 2.0, float, Interval(1e-3, _LONGEST_S),
                                   "advertising period Delta of the FC [s]")
     # [policy]
     alpha: float = _p("policy", 0.01, float, Interval(0, 100, "right"),
                       "L2 regularisation strength of the SGD learner")
-    eta0: float = _p("policy", 0.01, float, _POSITIVE,
-                     "initial learning rate eta0 of the SGD learner")
-    initial_epochs: int = _p("policy", 7, int, _AT_LEAST_ONE,
-                             "epochs of the initial fit on the two assumed points")
+    eta0: float = _p("policy", 0.01, float, Interval(0, 100, "right"),
+                     "initial learning rate eta0 of the SGD learner (unused by its 'optimal' schedule)")
+    initial_epochs: int = _p("policy", 7, int, Interval(1, 10_000_000),
+                             "epochs of the initial fit on the two assumed points (at most the "
+                             "initial-fit draws of RUN_LIMITS with one UAV)")
     scaler_mean: tuple[float, float, float] = _p(
         "policy", (3500.0, 2.75, 50.0), tuple, Interval(-1e9, 1e9),
         "standardisation mean of the features (distance [m], mass [kg], SoC [%])", length=3)

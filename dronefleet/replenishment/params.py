@@ -12,9 +12,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ..config import ConfigError
+from ..config import ConfigError, _show
 
-__all__ = ["Params", "ParamsError", "STRATEGIES", "BASE_CAPACITY", "MAX_SAMPLES", "MAX_ROBOT_TICKS"]
+__all__ = ["Params", "ParamsError", "STRATEGIES", "BASE_CAPACITY", "UPPER_LIMITS", "RUN_LIMITS", "run_size"]
 
 STRATEGIES = ("fixed", "mobile")
 
@@ -24,14 +24,44 @@ STRATEGIES = ("fixed", "mobile")
 # would make the placement overlap by construction.
 BASE_CAPACITY = 4 * 22
 
-# Cap on trials x samples of the time series (8 bytes x ~10 columns each):
-# 1e7 rows stay below 1 GB.
-MAX_SAMPLES = 10_000_000
+#: Highest value of each number, from its meaning (lowest values: see :meth:`Params.validate`;
+#: n_workers + n_chargers <= BASE_CAPACITY, transfer_loss < 1): each keeps the bounds
+#: (:mod:`dronefleet.replenishment.bounds`) and every energy, duration and sum of a run finite.
+UPPER_LIMITS: dict[str, tuple[float, str]] = {
+    "trials": (100_000, "trials of one run, each seeded and set up apart; a sweep's seeds add runs"),
+    "ticks": (100_000_000, "1e7 s, about four months"),
+    "sample_every": (100_000_000, "the longest trial; a longer period samples tick 0 only"),
+    "worker_capacity": (1e6, "energy units: 10,000 times the spec's battery, 2e8 ticks of idling at v_min"),
+    "charger_capacity_factor": (1e3, "a mobile charger holding 1,000 worker batteries"),
+    "work_ratio": (1e3, "v_work = 100 per tick: the spec's battery spent working in one tick"),
+    "charge_rate": (1e3, "v_charge = 1,000 per tick: the spec's battery filled in a tenth of a tick"),
+}
 
-# Cap on trials x ticks x robots, the kernel's work (~1 us per robot-tick for a plain
-# implementation, far less vectorised): the paper's largest grid point (50 x 6000 x 18)
-# is 5.4e6; 1e9 keeps one configuration to minutes, never hours.
-MAX_ROBOT_TICKS = 1_000_000_000
+#: What one trial costs besides its ticks, in robot-ticks of the kernel (~0.1-0.3 us each):
+#: seeding its random streams (a SeedSequence spawn, ~150 us) and setting up its robots.
+TRIAL_SETUP_ROBOT_TICKS = 1_000
+#: Memory a run holds [bytes]: per trial (seeds, streams, summary row), per robot of a trial (the
+#: kernel's ~35 per-robot arrays and the per-robot results) and per time-series row (the series
+#: array and its table), from the peak memory of measured runs, rounded up.
+TRIAL_BYTES, ROBOT_BYTES, SAMPLE_BYTES = 400, 320, 200
+
+#: Limits on the size of a run (all its trials), checked by :meth:`Params.validate` before any
+#: work (see :func:`run_size`), each counting all the work, per trial too: the paper's largest
+#: grid point (50 trials x 6000 ticks x 18 robots) is 5.4e6 robot-ticks and 7 MB.
+RUN_LIMITS: dict[str, float] = {
+    "robot_ticks": 1e9,   # trials x (ticks x robots + TRIAL_SETUP_ROBOT_TICKS): minutes, never hours
+    "bytes": 2e9,         # trials x (TRIAL_BYTES + robots x ROBOT_BYTES + samples x SAMPLE_BYTES)
+}
+
+
+def run_size(params: Params) -> dict[str, int]:
+    """The size of a run of ``params`` as :data:`RUN_LIMITS` counts it: ``robot_ticks`` (the
+    kernel's work, each trial's set-up counted as TRIAL_SETUP_ROBOT_TICKS) and ``bytes`` (memory)."""
+    robots = params.n_workers + params.n_chargers
+    samples = params.ticks // params.sample_every + 1
+    return {"robot_ticks": params.trials * (params.ticks * robots + TRIAL_SETUP_ROBOT_TICKS),
+            "bytes": params.trials * (TRIAL_BYTES + robots * ROBOT_BYTES + samples * SAMPLE_BYTES)}
+
 
 # Fixed physical constants of the model (section 2), not parameters.
 V_MIN = 0.005           # idle cost, every robot, every tick
@@ -120,7 +150,7 @@ class Params:
             Naming the parameter, its value and what is allowed.
         """
         def fail(name, value, allowed):
-            raise ParamsError(f"{name} = {value!r} is not allowed: {allowed}", (name,))
+            raise ParamsError(f"{name} = {_show(value)} is not allowed: {allowed}", (name,))
 
         if self.strategy not in STRATEGIES:
             fail("strategy", self.strategy, 'use "fixed" or "mobile"')
@@ -162,15 +192,20 @@ class Params:
             fail("trials", self.trials, "must be >= 1")
         if self.sample_every < 1:
             fail("sample_every", self.sample_every, "must be >= 1")
-        samples = self.trials * (self.ticks // self.sample_every + 1)
-        if samples > MAX_SAMPLES:
+        for name, (highest, meaning) in UPPER_LIMITS.items():
+            if getattr(self, name) > highest:
+                fail(name, getattr(self, name), f"must be <= {highest:g} ({meaning})")
+        size = run_size(self)
+        robots = self.n_workers + self.n_chargers
+        if size["robot_ticks"] > RUN_LIMITS["robot_ticks"]:
             raise ParamsError(
-                f"trials x (ticks // sample_every + 1) = {samples} time-series rows exceed "
-                f"{MAX_SAMPLES}: raise sample_every or lower trials/ticks",
-                ("trials", "ticks", "sample_every"))
-        robot_ticks = self.trials * self.ticks * (self.n_workers + self.n_chargers)
-        if robot_ticks > MAX_ROBOT_TICKS:
+                f"the run would take ~{size['robot_ticks']:.3g} robot-ticks (trials {self.trials} x (ticks "
+                f"{self.ticks} x {robots} robots + {TRIAL_SETUP_ROBOT_TICKS:,} per trial's set-up)); at most "
+                f"{RUN_LIMITS['robot_ticks']:g}: lower trials or ticks", ("trials", "ticks"))
+        if size["bytes"] > RUN_LIMITS["bytes"]:
             raise ParamsError(
-                f"trials x ticks x robots = {robot_ticks:.3g} robot-ticks exceed "
-                f"{MAX_ROBOT_TICKS:.0e}: lower trials or ticks", ("trials", "ticks"))
+                f"the run would hold ~{size['bytes'] / 1e9:.3g} GB (trials {self.trials} x ({TRIAL_BYTES} B + "
+                f"{robots} robots x {ROBOT_BYTES} B + {self.ticks // self.sample_every + 1} time-series rows x "
+                f"{SAMPLE_BYTES} B)); at most {RUN_LIMITS['bytes'] / 1e9:g} GB: raise sample_every or lower "
+                "trials or ticks", ("trials", "ticks", "sample_every"))
         return self

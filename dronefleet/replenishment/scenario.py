@@ -50,7 +50,7 @@ import numpy as np
 from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
 from ..scenarios import Field
 from .bounds import COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds
-from .params import BASE_CAPACITY, Params
+from .params import BASE_CAPACITY, UPPER_LIMITS, Params
 from .simulate import TRIAL_SEED_FACTOR, summary_columns
 
 if TYPE_CHECKING:
@@ -73,21 +73,29 @@ SEED_KEY = "first_trial"
 SEEDS_REQUIRED = False
 
 
+def _most(name: str) -> str:
+    """The upper limit of ``name`` as the schema shows it: 1e6, 1000."""
+    most = UPPER_LIMITS[name][0]
+    return f"{most:.0e}".replace("e+0", "e") if most >= 1e4 else f"{most:g}"
+
+
 SCHEMA: dict[str, Field] = {
-    "trials": Field("run", "trials", ">= 1", "trials of the configuration, advanced together"),
+    "trials": Field("run", "trials", f"[1, {_most('trials')}]", "trials of the configuration, advanced together"),
     "first_trial": Field("run", "index", f"[1, {MAX_FIRST_TRIAL:.0e}]",
                          f"index k of the first trial; trial k uses seed {TRIAL_SEED_FACTOR} k"),
-    "ticks": Field("run", "ticks of 0.1 s", ">= 1", "T, length of a trial"),
-    "sample_every": Field("run", "ticks", ">= 1", "sampling period of the time series"),
+    "ticks": Field("run", "ticks of 0.1 s", f"[1, {_most('ticks')}]", "T, length of a trial"),
+    "sample_every": Field("run", "ticks", f"[1, {_most('sample_every')}]", "sampling period of the time series"),
     "strategy": Field("robots", "-", '"fixed" | "mobile"',
                       "fixed: workers charge in the base; mobile: chargers bring energy to the transfer area"),
     "n_workers": Field("robots", "robots", f">= 1, n_workers + n_chargers <= {BASE_CAPACITY}", "workers n_w"),
     "n_chargers": Field("robots", "robots", "0 if fixed, >= 1 if mobile", "mobile chargers n_m"),
-    "worker_capacity": Field("robots", "energy units", "> 0", "worker battery capacity c_w"),
-    "charger_capacity_factor": Field("robots", "fraction of c_w", "> 0",
+    "worker_capacity": Field("robots", "energy units", f"(0, {_most('worker_capacity')}]",
+                             "worker battery capacity c_w"),
+    "charger_capacity_factor": Field("robots", "fraction of c_w", f"(0, {_most('charger_capacity_factor')}]",
                                      "phi: mobile charger capacity c_m = phi c_w (unused if fixed)"),
-    "work_ratio": Field("energy", "-", "> 0", "r: working costs v_work = 0.1 r energy units per tick"),
-    "charge_rate": Field("energy", "-", "> 0",
+    "work_ratio": Field("energy", "-", f"(0, {_most('work_ratio')}]",
+                        "r: working costs v_work = 0.1 r energy units per tick"),
+    "charge_rate": Field("energy", "-", f"(0, {_most('charge_rate')}]",
                          "k: charging (base and charger to worker) at v_charge = 1.0 k energy units per tick"),
     "transfer_loss": Field("energy", "fraction", "[0, 1)",
                            "lambda: a worker receives (1 - lambda) of what a mobile charger gives"),

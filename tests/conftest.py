@@ -159,3 +159,20 @@ def drawn_figures(monkeypatch):
         monkeypatch.setattr(module, "_figure", keeping)
         return kept
     return keep
+
+
+class Counted:
+    """A value that counts the comparisons made with it: all share few hashes, each equals only
+    itself (how the repeat checks of grid values are shown to compare no pair needlessly)."""
+
+    comparisons = 0
+
+    def __init__(self, n):
+        self.n = n
+
+    def __hash__(self):
+        return self.n
+
+    def __eq__(self, other):
+        Counted.comparisons += 1
+        return self is other

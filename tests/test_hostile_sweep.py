@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import Counted
 
 from dronefleet import cli, executors, sweeps as sw
 from dronefleet.delivery import simulation
@@ -215,22 +216,6 @@ def test_the_runs_cap_is_a_bound_on_the_runs_of_the_product(monkeypatch):
     monkeypatch.setattr(sw, "MAX_RUNS", 7)
     with pytest.raises(sw.SweepError, match="= 8 runs; a sweep may hold at most 7 runs"):
         sw.load_sweep(SMOKE)
-
-
-class Counted:
-    """A grid value that counts the comparisons made with it (all equal in hash, none equal)."""
-
-    comparisons = 0
-
-    def __init__(self, n):
-        self.n = n
-
-    def __hash__(self):
-        return self.n
-
-    def __eq__(self, other):
-        Counted.comparisons += 1
-        return self is other
 
 
 def test_repeated_grid_values_are_found_without_comparing_every_pair():

@@ -10,6 +10,7 @@ import re
 from pathlib import Path
 
 import pytest
+from conftest import Counted
 
 import dronefleet
 from dronefleet import cli, sweeps as sw
@@ -137,22 +138,6 @@ def test_hostile_api_arguments_are_one_line_config_errors_naming_them(call, frag
     message = str(error.value)
     assert "\n" not in message and len(message) < 1000, message[:2000]
     assert all(fragment in message for fragment in fragments), message
-
-
-class Counted:
-    """A value that counts the comparisons made with it (equal only to itself)."""
-
-    comparisons = 0
-
-    def __init__(self, n):
-        self.n = n
-
-    def __hash__(self):
-        return self.n
-
-    def __eq__(self, other):
-        Counted.comparisons += 1
-        return self is other
 
 
 def test_repeated_lists_are_found_without_comparing_every_pair():

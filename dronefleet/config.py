@@ -13,15 +13,15 @@ config and sweep file is read the same way and every refusal reads alike:
 * :data:`SCENARIO_KEY`, the top-level key that names a config's scenario;
 * :func:`shipped_config`, the path of a config or sweep file shipped with the package;
 * ``_parse_override`` (``--set key=value``), ``_show``, ``_name`` and ``_suggest`` (values,
-  names and "did you mean" in messages; ``_show`` never recurses and stops at the characters shown).
+  names and "did you mean" in messages; ``_show`` shows a few items a few levels deep).
 """
 
 from __future__ import annotations
 
 import difflib
-import itertools
 import importlib.resources
 import os
+import reprlib
 import stat
 import tomllib
 from os import PathLike
@@ -56,68 +56,36 @@ class ConfigError(ValueError):
 MAX_DEPTH = 8
 
 
-def _show(value: Any, limit: int = 60) -> str:
-    """repr of a value, cut to ``limit`` characters: a message never prints a whole big value.
+class _Shown(reprlib.Repr):
+    """repr for messages: a few items of each container, a few levels deep, so that showing a
+    value nested thousands deep, holding itself or of millions of items costs its first characters."""
 
-    Built piece by piece from the front, without recursion, and only as far as shown: a value
-    nested thousands deep, holding itself or of millions of items costs its first characters.
-    """
-    if type(value) is int:
+    def __init__(self) -> None:
+        super().__init__()
+        self.maxlevel = 4
+        self.maxlist = self.maxtuple = self.maxset = self.maxfrozenset = self.maxdeque = self.maxdict = 12
+        self.maxstring = self.maxother = self.maxlong = 60
+
+    def repr_int(self, x: int, level: int) -> str:
         try:
-            repr(value)
+            return super().repr_int(x, level)
         except ValueError:  # an int too long to print (sys.get_int_max_str_digits)
-            return f"an integer of {value.bit_length()} bits"
-    opening = {list: ("[", "]"), tuple: ("(", ")"), dict: ("{", "}"), set: ("{", "}"),
-               frozenset: ("frozenset({", "})")}
-    pieces, length, todo = [], 0, [value]   # todo: values to show, or text, the next last
-    while todo and length <= limit:
-        item = todo.pop()
-        if isinstance(item, _Text):
-            text = item.text
-        elif type(item) in opening and item:
-            start, end = opening[type(item)]
-            items = list(itertools.islice(item.items() if type(item) is dict else item, limit))
-            more = len(item) > len(items)
-            todo.append(_Text(("," if type(item) is tuple and len(item) == 1 else "") + (", ..." if more else "")
-                              + end))
-            for n, element in enumerate(reversed(items)):
-                if n:
-                    todo.append(_Text(", "))
-                if type(item) is dict:
-                    todo.extend((element[1], _Text(": "), element[0]))
-                else:
-                    todo.append(element)
-            text = start
-        else:
-            text = _leaf(item, limit)
-        pieces.append(text)
-        length += len(text)
-    text = "".join(pieces)
-    return text if len(text) <= limit and not todo else text[:limit - 3] + "..."
+            return f"an integer of {x.bit_length()} bits"
 
-
-class _Text:
-    """Literal text in :func:`_show`'s work list (as opposed to a value to show)."""
-
-    __slots__ = ("text",)
-
-    def __init__(self, text: str) -> None:
-        self.text = text
-
-
-def _leaf(value: Any, limit: int) -> str:
-    """repr of a value :func:`_show` does not take apart, at most about ``limit`` characters long."""
-    if isinstance(value, str) and len(value) > limit:
-        return repr(value[:limit])
-    if type(value) is int:
+    def repr_instance(self, x: Any, level: int) -> str:
         try:
-            return repr(value)
-        except ValueError:
-            return f"<an integer of {value.bit_length()} bits>"
-    try:
-        return repr(value)
-    except Exception:  # an object whose repr fails (or recurses too deep): its type is what we know
-        return f"<{type(value).__name__}>"
+            return super().repr_instance(x, level)
+        except RecursionError:  # an object whose own repr recurses without end
+            return f"<{type(x).__name__}>"
+
+
+_SHOWN = _Shown()
+
+
+def _show(value: Any, limit: int = 60) -> str:
+    """repr of a value, cut to ``limit`` characters: a message never prints a whole big value."""
+    text = _SHOWN.repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 _SCALARS = frozenset((int, float, str, bool, type(None)))

@@ -23,7 +23,7 @@ import stat
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from .config import ConfigError, _show
+from .config import ConfigError, _show, too_deep
 
 if TYPE_CHECKING:
     import numpy
@@ -80,20 +80,6 @@ def _first_line(error: BaseException) -> str:
     return text.splitlines()[0][:200] if text else type(error).__name__
 
 
-def _depth(value: Any) -> int:
-    """How deeply lists and dicts nest in ``value`` (0 for a scalar), without recursion."""
-    deepest, stack = 0, [(value, 0)]
-    while stack:
-        item, level = stack.pop()
-        if isinstance(item, dict):
-            item = list(item.values())
-        if isinstance(item, list):
-            level += 1
-            deepest = max(deepest, level)
-            stack.extend((child, level) for child in item)
-    return deepest
-
-
 def parse_json(text: str | bytes, where: str, max_depth: int = MAX_JSON_DEPTH) -> Any:
     """``text`` parsed as JSON; DataError naming ``where`` if it is not JSON or nests deeper than
     ``max_depth``. Only plain values come out: JSON has no way to name code."""
@@ -103,7 +89,7 @@ def parse_json(text: str | bytes, where: str, max_depth: int = MAX_JSON_DEPTH) -
         raise DataError(f"{where} nests lists or objects more than {max_depth} deep") from None
     except ValueError as e:  # JSONDecodeError, UnicodeDecodeError, an integer of too many digits
         raise DataError(f"{where} is not valid JSON: {_first_line(e)}") from None
-    if _depth(value) > max_depth:
+    if too_deep(value, max_depth) is not None:
         raise DataError(f"{where} nests lists or objects more than {max_depth} deep")
     return value
 

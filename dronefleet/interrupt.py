@@ -17,8 +17,12 @@ the system's default), the kernel is simply called.
 import signal
 import threading
 import time
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from numba import types
+from numba.core.dispatcher import Dispatcher
 
 #: How long, after Ctrl-C, a kernel may take to reach its next check point [s]. The built-in
 #: kernels reach one within microseconds; a plugin's winner rule that never returns does not.
@@ -28,7 +32,8 @@ GRACE_S = 3.0
 _WAKE_S = 0.1
 
 
-def call(kernel, *args, argtypes=None, culprit="the compiled kernel"):
+def call(kernel: Dispatcher, *args: Any, argtypes: Sequence[types.Type] | None = None,
+         culprit: str = "the compiled kernel") -> Any:
     """``kernel(*args, stop)``, stopped at its next check point by Ctrl-C.
 
     Parameters
@@ -92,7 +97,7 @@ def call(kernel, *args, argtypes=None, culprit="the compiled kernel"):
     return result
 
 
-def _waited(done, timeout):
+def _waited(done: threading.Event, timeout: float) -> bool:
     """Wait up to ``timeout`` s for ``done`` to be set, Ctrl-C again being ignored; True if it was."""
     deadline = time.monotonic() + timeout
     while not done.is_set() and time.monotonic() < deadline:

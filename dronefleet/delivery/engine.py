@@ -1010,7 +1010,7 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop,
 RULE_KERNEL = types.FunctionType(RULE_SIGNATURE)
 
 
-def plugin_argtypes(args):
+def plugin_argtypes(args: tuple) -> tuple:
     """Types to compile :func:`advance` for with a plugin rule: those of ``args`` (its first
     nine arguments), then RULE_KERNEL for the rule (``stop`` is added by :func:`dronefleet.interrupt.call`).
 

@@ -402,15 +402,17 @@ def main(argv: list[str] | None = None) -> int:
     """The ``dronefleet`` command with the arguments ``argv`` (default: the process's); returns the
     exit code: 0 done, 1 failed runs or differences found, 2 bad input, 130 interrupted."""
     argv = sys.argv[1:] if argv is None else argv
-    args = build_parser(reproduce_arguments="reproduce" in argv).parse_args(argv)
-    console.configure(args.level)
     try:
+        # within the try: building the parser of reproduce imports pandas and numba (a second)
+        args = build_parser(reproduce_arguments="reproduce" in argv).parse_args(argv)
+        console.configure(args.level)
         return args.func(args)
     except ConfigError as error:  # bad input (config, sweep, fleet file): refused before any work
         print(f"dronefleet: error: {error}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:  # Ctrl-C: outputs are complete or absent (see records.write_run)
-        print("dronefleet: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as interrupted:  # Ctrl-C: outputs are complete or absent (see records.write_run)
+        # its message, if any, says where (a plugin's import) or what did not stop (dronefleet.interrupt)
+        print(f"dronefleet: interrupted{f' {interrupted}' if str(interrupted) else ''}", file=sys.stderr)
         return 130
     except BrokenPipeError:  # the reader of stdout went away (| head): stop quietly
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # so the exit flush cannot fail

@@ -7,6 +7,7 @@ failure of one item never stops the others. ``function`` and the items must pick
 module-level function or a ``functools.partial`` of one): they travel to other processes.
 """
 
+import contextlib
 import ctypes
 import multiprocessing
 import os
@@ -48,8 +49,30 @@ def _outcome(future):
         return None, error
 
 
+def _start_worker(parent):
+    """Worker initializer: Ctrl-C as :func:`_interruptible` says, and the end of the worker with its parent."""
+    # Started with SIGINT blocked (see local): ignored from now on, a Ctrl-C pending is dropped.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    _die_with_parent(parent)
+
+
+def _interruptible(function, item):
+    """``function(item)`` in a worker, Ctrl-C raising KeyboardInterrupt meanwhile only.
+
+    The terminal sends Ctrl-C to the workers too. An idle worker ignores it (it would print
+    a traceback of its own); a worker's item stops (its compiled kernel at its next check
+    point, see :mod:`dronefleet.interrupt`) and returns the KeyboardInterrupt to the parent.
+    """
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        return function(item)
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _die_with_parent(parent):
-    """Worker initializer: end this worker when the process ``parent`` (its pid) that started it dies.
+    """End this worker when the process ``parent`` (its pid) that started it dies.
 
     A worker would otherwise outlive a sweep killed with SIGKILL (which no handler sees) and
     go on running its run; the multiprocessing resource tracker, which the workers keep
@@ -86,6 +109,10 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
     ``BrokenProcessPool``; holding one, it names the item that killed it exactly, and only
     that worker is replaced, so the other items run on unaffected. Workers end when this
     process dies, even by SIGKILL (see :func:`_die_with_parent`).
+
+    Ctrl-C (KeyboardInterrupt here) is passed on to the workers (the terminal sends it to them
+    too, but ``kill -INT`` does not), whose items stop: the items done are kept, the running
+    ones end without writing more (see :func:`_interruptible`), the others never start.
     """
     items = deque(items)
     if not items:
@@ -99,13 +126,20 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
     context = multiprocessing.get_context("spawn")
 
     def worker_pool():
-        return ProcessPoolExecutor(1, mp_context=context, initializer=_die_with_parent, initargs=(os.getpid(),))
+        return ProcessPoolExecutor(1, mp_context=context, initializer=_start_worker, initargs=(os.getpid(),))
 
     holding = {}  # future -> (its pool, its item)
 
     def submit(pool):
         item = items.popleft()
-        holding[pool.submit(function, item)] = pool, item
+        # A worker starts in the submit: with SIGINT blocked, which it inherits, so that a
+        # Ctrl-C while it starts up is no traceback of its own (as multiprocessing's resource
+        # tracker does); it is delivered here once unblocked.
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            holding[pool.submit(_interruptible, function, item)] = pool, item
+        finally:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
     try:
         for _ in range(min(jobs, len(items))):
@@ -124,7 +158,11 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
                     pool.shutdown()
                 yield item, result, error
     finally:
-        for pool, _ in holding.values():  # on Ctrl-C: wait for the items running; the others never start
+        for pool, _ in holding.values():  # on Ctrl-C: stop the items running; the others never start
+            for process in (pool._processes or {}).values():  # the pool's worker (a private attribute)
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(process.pid, signal.SIGINT)
+        for pool, _ in holding.values():
             pool.shutdown()
 
 

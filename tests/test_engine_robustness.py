@@ -67,5 +67,5 @@ def test_a_nan_event_time_returns_invalid_state_from_the_kernel():
     state.counters[engine.NEXT_SAMPLE] = state.series.delivered.shape[0]  # every sample taken
     engine.schedule(state.fleet, 1, np.nan)  # next_s is kept in the event heap: set it through it
     status = engine.advance(state.book, state.fleet, state.attempts, state.series, state.counters,
-                            state.params, state.table, state.bid_rng, math.inf)
+                            state.params, state.table, state.bid_rng, math.inf, None, np.zeros(1, np.int8))
     assert status == engine.INVALID_STATE

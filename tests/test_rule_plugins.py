@@ -27,6 +27,7 @@ MODULE_NUMBERS = itertools.count()
 
 # Rules of a test module: a copy of the built-in most_confident, and bad plugins.
 RULES_MODULE = """
+import numpy as np
 from numba import njit
 
 
@@ -84,6 +85,46 @@ def listed_bids_on(f, w_norm, soc, theta, rng):
 listed_bids_on.bids_on = ["policy"]
 
 
+@njit
+def score_first(f, w_norm, soc, theta, rng):
+    if f >= 0.0:
+        return soc, True
+    return 0.0, False
+
+
+score_first.bids_on = "policy"
+
+
+@njit
+def nan_score(f, w_norm, soc, theta, rng):
+    if f >= 0.0:
+        return True, np.nan
+    return False, 0.0
+
+
+nan_score.bids_on = "policy"
+
+
+@njit
+def raises(f, w_norm, soc, theta, rng):
+    if f >= 0.0:
+        raise ValueError("no battery reading")
+    return False, 0.0
+
+
+raises.bids_on = "policy"
+
+
+@njit
+def int_score(f, w_norm, soc, theta, rng):
+    if f >= 0.0:
+        return True, 1
+    return False, 0
+
+
+int_score.bids_on = "policy"
+
+
 def __getattr__(name):
     if name == "unready":
         raise RuntimeError(f"{name} is not ready")
@@ -127,9 +168,13 @@ def rules_module(tmp_path, monkeypatch):
     ("{m}:unready", "names 'unready', which module '{m}' fails to give (RuntimeError: unready is not ready)"),
     ("broken_rule", ("is an entry point of dronefleet.winner_rules ({m}_missing:rule) that fails to load: "
                      "ModuleNotFoundError")),
+    ("{m}:score_first", "returns Tuple(float64, bool), not (bids, score): a bool, then a float, in this order"),
+    ("exiting:rule", "names module 'exiting', which cannot be imported (ImportError: it calls sys.exit(3) when "
+                     "imported)"),
 ])
 def test_a_bad_rule_is_refused_in_one_line(rule, fragment, rules_module, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(simulation, "simulate", lambda *a, **k: pytest.fail("the run was simulated"))
+    (tmp_path / "exiting.py").write_text("import sys\nsys.exit(3)\n")
     rule, fragment = rule.format(m=rules_module), fragment.format(m=rules_module)
     code = cli.main(["run", "--set", f"rule={rule}", "--out", str(tmp_path / "out")])
     lines = capsys.readouterr().err.splitlines()
@@ -137,6 +182,36 @@ def test_a_bad_rule_is_refused_in_one_line(rule, fragment, rules_module, tmp_pat
     assert len(lines) == 1 and lines[0].startswith(f"dronefleet: error: auction.rule = '{rule}' "), lines
     assert fragment in lines[0]
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("rule, fragment", [
+    ("nan_score", "the winner rule '{m}:nan_score' scored the bid of UAV 0 at t = 0 s NaN or infinite; "
+                  "a rule's score must be a finite number"),
+    ("raises", "the winner rule '{m}:raises' raised ValueError: no battery reading ({m}.py, line "),
+])
+def test_a_rule_that_breaks_the_contract_while_running_stops_the_run_in_one_line(rule, fragment, rules_module,
+                                                                                 tmp_path, capsys):
+    code = cli.main(["run", "--set", f"rule={rules_module}:{rule}", "--set", "horizon_weeks=0.01",
+                     "--out", str(tmp_path / "out")])
+    lines = capsys.readouterr().err.splitlines()
+    assert code == 2
+    assert len(lines) == 1 and lines[0].startswith("dronefleet: error: "), lines
+    assert fragment.format(m=rules_module) in lines[0]
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_int_score_is_still_a_score(rules_module):
+    assert resolve_rule(f"{rules_module}:int_score").code == PLUGIN
+
+
+def test_a_plugin_module_slow_to_import_is_said(tmp_path, monkeypatch, caplog):
+    (tmp_path / "slow_plugin.py").write_text(
+        "import time\nfrom numba import njit\ntime.sleep(1.0)\n\n\n@njit\n"
+        "def rule(f, w_norm, soc, theta, rng):\n    return True, soc\n\n\nrule.bids_on = 'any'\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(auction, "IMPORT_NOTICE_S", 0.05)
+    assert resolve_rule("slow_plugin:rule").code == PLUGIN
+    assert "still importing module 'slow_plugin' of winner rule 'slow_plugin:rule' after 0.05 s" in caplog.text
 
 
 def test_the_unknown_rule_message_lists_the_installed_plugins(rules_module):

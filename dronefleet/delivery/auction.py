@@ -41,8 +41,11 @@ The engine receives a plugin as a first-class function (numba ``FunctionType`` o
 ``RULE_SIGNATURE``): one compilation of the engine, disk-cached like the built-in one,
 serves every plugin, and calls the plugin through a pointer (no inlining). Each process
 compiles the plugin itself once unless it is ``cache=True``. :func:`resolve_rule` loads
-and checks a rule by name. Plugins cannot be ``base_rule`` of ``reservation``. An entry
-point named like a built-in rule is not used (a warning says so): its dotted path is.
+and checks a rule by name, including what the rule returns of itself (numba would convert a
+(score, bids) pair to the signature). While running, a bidder's score must be finite and the
+rule must not raise: the run stops with a :class:`PluginError` naming it. Plugins cannot be
+``base_rule`` of ``reservation``. An entry point named like a built-in rule is not used (a
+warning says so): its dotted path is.
 
 Files are data: a config read back from a file (a run's tables, a saved fleet, a sweep's
 dataset) may name a plugin, but only the user's own config (TOML file, ``--set``, API argument)
@@ -54,18 +57,24 @@ without loading anything: a ``"module:function"`` path is kept as the name it is
 forecast is :func:`reservation_wait`; the engine runs the two phases.
 """
 
+import contextlib
 import functools
 import importlib
 import logging
+import threading
 from importlib.metadata import entry_points
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit, typeof, types
+from numba.core import compiler, typed_passes
+from numba.core.compiler_lock import global_compiler_lock
+from numba.core.compiler_machinery import FunctionPass, register_pass
 from numba.core.dispatcher import Dispatcher
 from numba.core.errors import NumbaError
+from numba.core.registry import cpu_target
 
-from ..config import _suggest
+from ..config import ConfigError, _suggest
 from ..fpmath import log
 
 logger = logging.getLogger(__name__)  # not ``log``: that is fpmath's logarithm here
@@ -79,6 +88,8 @@ PLUGIN = -2
 #: What the engine passes to a rule and expects back (see the module doc).
 RULE_ARGS = (types.float64, types.float64, types.float64, types.float64, typeof(np.random.default_rng(0)))
 RULE_SIGNATURE = types.Tuple((types.boolean, types.float64))(*RULE_ARGS)
+#: After how long a plugin module still importing is said to be [s] (it may hang: Ctrl-C stops it).
+IMPORT_NOTICE_S = 10.0
 
 
 @njit(cache=True)
@@ -165,6 +176,15 @@ class RuleError(ValueError):
     """A rule name that names no usable rule; the message completes "rule = 'name' ..."."""
 
 
+class PluginError(ConfigError):
+    """A plugin rule broke its contract while a run used it (it raised, or scored a bid NaN or infinite)."""
+
+
+def plugin_name(kernel) -> str:
+    """``module:function`` of a plugin rule's compiled function, to name it in messages."""
+    return f"{kernel.py_func.__module__}:{kernel.py_func.__qualname__}"
+
+
 def installed_plugins() -> tuple[str, ...]:
     """Names of the plugin rules installed as entry points, sorted."""
     return tuple(sorted(ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)))
@@ -224,18 +244,39 @@ def _plugin(name: str) -> Rule:
                             f"{', '.join(map(repr, names))}, or a plugin's 'package.module:function'")
         entry_point = next(iter(found))
         try:
-            kernel = entry_point.load()
+            with _importing(entry_point.module, name):
+                kernel = entry_point.load()
         except Exception as e:  # the plugin's own error, whatever it is: the user must see it
             raise RuleError(f"is an entry point of {ENTRY_POINT_GROUP} ({entry_point.value}) that fails to "
                             f"load: {type(e).__name__}: {e}") from None
     return _checked(kernel)
 
 
+@contextlib.contextmanager
+def _importing(module_name: str, rule: str):
+    """Around the import of a plugin's module: one that calls sys.exit is an ImportError, Ctrl-C
+    names the module (an import may hang), and an import still going after IMPORT_NOTICE_S is said."""
+    notice = threading.Timer(IMPORT_NOTICE_S, lambda: logger.warning(
+        f"dronefleet: still importing module {module_name!r} of winner rule {rule!r} after "
+        f"{IMPORT_NOTICE_S:g} s (Ctrl-C stops)"))
+    notice.daemon = True
+    notice.start()
+    try:
+        yield
+    except SystemExit as e:  # not an Exception: it would end the process, silently
+        raise ImportError(f"it calls sys.exit({e.code!r}) when imported") from None
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt(f"while importing module {module_name!r} of winner rule {rule!r}") from None
+    finally:
+        notice.cancel()
+
+
 def _import_path(path: str):
     """The object at ``"package.module:attribute"``."""
     module_name, _, attribute = path.partition(":")
     try:
-        module = importlib.import_module(module_name)
+        with _importing(module_name, path):
+            module = importlib.import_module(module_name)
     except Exception as e:  # ImportError, or whatever the module raises on import
         raise RuleError(f"names module {module_name!r}, which cannot be imported ({type(e).__name__}: {e}); "
                         "allowed: a built-in rule, an installed plugin or 'package.module:function'") from None
@@ -271,7 +312,45 @@ def _checked(kernel) -> Rule:
     returns = kernel.overloads[RULE_ARGS].signature.return_type
     if returns != RULE_SIGNATURE.return_type:
         raise RuleError(f"is compiled to return {returns}, not (bool, float64)")
+    # Compiled for the return type, numba converts what the rule returns: a literal True or an
+    # int score, but also a (score, bids) pair the wrong way round. What it returns of itself tells.
+    returns = _own_return_type(kernel)
+    if not (isinstance(returns, types.BaseTuple) and len(returns) == 2 and isinstance(returns[0], types.Boolean)
+            and isinstance(returns[1], (types.Float, types.Integer))):
+        raise RuleError(f"returns {returns}, not (bids, score): a bool, then a float, in this order")
     return Rule(PLUGIN, kernel, bids_on)
+
+
+@register_pass(mutates_CFG=False, analysis_only=True)
+class _ReturnTypeResult(FunctionPass):
+    """The last pass of :class:`_TypingPipeline`: its result is the return type numba inferred."""
+
+    _name = "dronefleet_return_type_result"
+
+    def __init__(self):
+        FunctionPass.__init__(self)
+
+    def run_pass(self, state):
+        state.cr = state.return_type
+        return False
+
+
+class _TypingPipeline(compiler.CompilerBase):
+    """numba's front end and type inference only (no code generated): ~20 ms for a rule."""
+
+    def define_pipelines(self):
+        passes = compiler.DefaultPassBuilder.define_untyped_pipeline(self.state)
+        passes.add_pass(typed_passes.NopythonTypeInference, "nopython frontend")
+        passes.add_pass(_ReturnTypeResult, "return type")
+        passes.finalize()
+        return [passes]
+
+
+def _own_return_type(kernel):
+    """The numba type a rule returns for RULE_ARGS when no return type is imposed."""
+    with global_compiler_lock:
+        return compiler.compile_extra(cpu_target.typing_context, cpu_target.target_context, kernel.py_func,
+                                      RULE_ARGS, None, compiler.Flags(), {}, pipeline_class=_TypingPipeline)
 
 
 @njit(cache=True)

@@ -44,8 +44,10 @@ EV_CAPABLE, EV_NOT_CAPABLE, EV_BID, EV_WON, EV_LOST_BID, EV_DELIVER, EV_COND_RET
     np.int64(event) for event in range(len(EVENT_NAMES)))
 
 # Status returned by ``advance``. INVALID_STATE: no event fits the state (e.g. a NaN event time
-# from non-finite input); the kernel stops rather than write anywhere.
-DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED, INVALID_STATE = 0, 1, 2, 3
+# from non-finite input); the kernel stops rather than write anywhere. STOPPED: its ``stop`` flag
+# was set (Ctrl-C, see dronefleet.interrupt). BAD_SCORE: a plugin rule's bidder had a score that
+# is not finite (the UAV is in counters[REFUSED_UAV]).
+DONE, ATTEMPTS_FULL, SUPERVISOR_REFUSED, INVALID_STATE, STOPPED, BAD_SCORE = 0, 1, 2, 3, 4, 5
 
 # Slots of the int64 ``counters`` array (scalars the kernel updates in place).
 (NEXT_ORDER, QUEUE_LEN, LAST_ADVERTISED, NEXT_TICK, N_ATTEMPTS, NEXT_SAMPLE, N_DELIVERED, N_ABORTED,
@@ -818,7 +820,7 @@ def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
 
 @njit(cache=True)
 def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel):
-    """Advertise one order at tick time ``t`` and resolve its auction. False if refused.
+    """Advertise one order at tick time ``t``, resolve its auction: DONE, SUPERVISOR_REFUSED or BAD_SCORE.
 
     Immediate bids are resolved by the rule (``rule_kernel``: a plugin's, see ``advance``). With
     reservations and nobody bidding now, the idle UAVs bid for later (:func:`_reservation_bids`):
@@ -863,11 +865,15 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
             f = decision(coef, fleet.intercept, i, x0, x1, (soc - params.soc_mean) / params.soc_std)
             w_norm = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
             bids, score = bid(params.rule, rule_kernel, f, w_norm, soc, params.theta, rng)
+            # A plugin's bid must have a finite score: NaN loses every comparison (nobody would win).
+            if rule_kernel is not None and bids and not abs(score) < np.inf:
+                counters[REFUSED_UAV] = i
+                return BAD_SCORE
         if not bids:
             # With reservations the UAV's step waits for the second phase.
             if (not params.reserves and not fleet.quiet[i]
                     and not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_NOT_CAPABLE)):
-                return False
+                return SUPERVISOR_REFUSED
             continue
         if fleet.bid_silent[i]:
             bidder[i] = BID_SILENT
@@ -875,7 +881,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
                 and _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_BID)):
             bidder[i] = BID_STEPPED
         else:
-            return False
+            return SUPERVISOR_REFUSED
         if score >= best:  # ascending ids: ties go to the highest id
             best = score
             winner = i
@@ -884,23 +890,23 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     if params.reserves:
         refused, reserver, best_wait = _reservation_bids(book, fleet, counters, params, table, order, t, winner >= 0)
         if refused:
-            return False
+            return SUPERVISOR_REFUSED
         reserved = winner < 0 and reserver >= 0
         if reserved:
             winner = reserver
     if winner < 0:
         counters[LAST_ADVERTISED] = order
-        return True
+        return DONE
     for j in range(n_evaluated):
         i = uavs[j]
         if (bidder[i] == BID_STEPPED and i != winner
                 and not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, i, EV_LOST_BID)):
-            return False
+            return SUPERVISOR_REFUSED
     if bidder[winner] == BID_SILENT:  # its bid's steps, allowed (bid_silent), then the win
         _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_CAPABLE)
         _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_BID)
     if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_WON):
-        return False
+        return SUPERVISOR_REFUSED
     # Allocated: out of the queue, and the next advertisement starts again from the oldest.
     _dequeue(book, fleet, counters, pos)
     counters[LAST_ADVERTISED] = -1
@@ -915,33 +921,39 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
         schedule(fleet, winner, _reserved_takeoff(book, fleet, params, winner, order, t, best_wait))
         counters[N_RESERVED] += 1
         counters[N_RESERVATIONS] += 1
-        return True
+        return DONE
     if not _step(table, fleet.sup, fleet.quiet, fleet.bid_silent, counters, winner, EV_DELIVER):
-        return False
+        return SUPERVISOR_REFUSED
     fleet.forecast_wait_s[winner] = np.nan
     _takeoff(book, fleet, attempts, counters, params, winner, order, t, winner_soc)
-    return True
+    return DONE
 
 
-@njit(cache=True)
-def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop, rule_kernel=None):
+@njit(cache=True, nogil=True)
+def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop, rule_kernel, stop):
     """Process every event at or before ``t_stop`` (seconds), in the order of the module doc.
 
     All arguments but ``params``, ``table`` (compiled supervisor, (K, states, events)
-    int64), ``rng`` (random-bid stream) and ``rule_kernel`` are updated in place. ``rule_kernel``
-    is None for a built-in rule (``params.rule``) and a plugin rule's function otherwise: call
-    :func:`advance_plugin` for that, which passes it as a first-class function. Returns DONE,
-    ATTEMPTS_FULL (stopped before an event that needs a new attempt row: grow
-    ``attempts`` and call again), SUPERVISOR_REFUSED (the UAV and event are in
-    ``counters``) or INVALID_STATE (the next event time is NaN or fits no event, as
-    non-finite inputs make it; nothing was written for it). Every branch tests its own
-    condition, so an index that derives from the state is used only where it is valid.
+    int64), ``rng`` (random-bid stream), ``rule_kernel`` and ``stop`` are updated in place.
+    ``rule_kernel`` is None for a built-in rule (``params.rule``) and a plugin rule's function
+    otherwise, passed as a first-class function (compiled for :func:`plugin_argtypes`).
+    ``stop`` (int8, (1,)) is read before every event: once set, the kernel returns STOPPED
+    (see :mod:`dronefleet.interrupt`). Returns DONE, ATTEMPTS_FULL (stopped before an event
+    that needs a new attempt row: grow ``attempts`` and call again), SUPERVISOR_REFUSED (the
+    UAV and event are in ``counters``), INVALID_STATE (the next event time is NaN or fits no
+    event, as non-finite inputs make it; nothing was written for it), STOPPED or BAD_SCORE
+    (a plugin rule's bidder scored NaN or an infinity: the UAV is in ``counters``, the auction's
+    tick is ``counters[NEXT_TICK]``). Every branch tests its own condition, so an index that
+    derives from the state is used only where it is valid. Without a GIL: it runs while the
+    caller's thread waits for Ctrl-C.
     """
     n_orders = book.arrival_s.shape[0]
     n_samples = series.delivered.shape[0]
     capacity = attempts.uav.shape[0]
     interval = params.advert_interval_s
     while True:
+        if stop[0] != 0:
+            return STOPPED
         if counters[N_ATTEMPTS] == capacity:
             return ATTEMPTS_FULL
         uav = fleet.event_heap[0]
@@ -970,8 +982,9 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop,
             counters[NEXT_ORDER] = order + 1
             _enqueue(book, fleet, counters, order)
         elif t_tick == t and advertising:
-            if not _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel):
-                return SUPERVISOR_REFUSED
+            status = _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel)
+            if status != DONE:
+                return status
             counters[NEXT_TICK] = tick + 1
         elif t_sample == t and counters[NEXT_SAMPLE] < n_samples:
             k = counters[NEXT_SAMPLE]
@@ -997,14 +1010,13 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop,
 RULE_KERNEL = types.FunctionType(RULE_SIGNATURE)
 
 
-def advance_plugin(book, fleet, attempts, series, counters, params, table, rng, t_stop, rule_kernel):
-    """:func:`advance` with the plugin rule ``rule_kernel`` (a numba dispatcher of the rule signature).
+def plugin_argtypes(args: tuple) -> tuple:
+    """Types to compile :func:`advance` for with a plugin rule: those of ``args`` (its first
+    nine arguments), then RULE_KERNEL for the rule (``stop`` is added by :func:`dronefleet.interrupt.call`).
 
     Called with the dispatcher itself, numba would compile a specialisation of ``advance`` per
     plugin and per process (its cache key is the dispatcher object, which no other process
     has), and add it to the disk cache each time; the specialisation for RULE_KERNEL is
     compiled once, cached, and takes any plugin.
     """
-    args = (book, fleet, attempts, series, counters, params, table, rng, t_stop)
-    entry = advance.compile(tuple(advance.typeof_pyval(a) for a in args) + (RULE_KERNEL,))
-    return entry(*args, rule_kernel)
+    return tuple(advance.typeof_pyval(a) for a in args) + (RULE_KERNEL,)

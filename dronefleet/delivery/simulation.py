@@ -13,14 +13,17 @@ with the seed of the first.
 
 import math
 import os
+import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from . import engine
-from .auction import BIDS_ON, PLUGIN, RULES, resolve_rule
+from .. import interrupt
+from .auction import BIDS_ON, PLUGIN, RULES, PluginError, plugin_name, resolve_rule
 from .config import SECONDS_PER_WEEK, Config
 from .energy import charge_rate, config_power, drain_per_watt
 from .fleet import SavedFleet, load_fleet
@@ -205,14 +208,16 @@ def advance(state: RunState, t_stop: float) -> None:
     """Run the engine over every event at or before ``t_stop``, growing the attempt table as needed.
 
     Raises SupervisorError if the supervisor refuses an event, InvalidStateError if the state
-    has no valid next event (non-finite inputs).
+    has no valid next event (non-finite inputs), PluginError if a plugin rule raises or scores
+    a bid NaN or infinite, KeyboardInterrupt on Ctrl-C (the engine stops at its next event).
     """
     while True:
         args = (state.book, state.fleet, state.attempts, state.series, state.counters,
                 state.params, state.table, state.bid_rng, t_stop)
-        # A built-in rule leaves rule_kernel out (passing None would be another specialisation).
-        status = (engine.advance(*args) if state.rule_kernel is None
-                  else engine.advance_plugin(*args, state.rule_kernel))
+        if state.rule_kernel is None:
+            status = interrupt.call(engine.advance, *args, None)
+        else:
+            status = _advance_plugin(state, args)
         if status == engine.DONE:
             return
         if status == engine.ATTEMPTS_FULL:
@@ -224,6 +229,11 @@ def advance(state: RunState, t_stop: float) -> None:
                     "config, e.g. a threshold so low that UAVs with an empty battery keep taking off")
             state.attempts = _attempt_table(min(2 * capacity, state.max_attempts), state.attempts)
             continue
+        if status == engine.BAD_SCORE:
+            t = state.counters[engine.NEXT_TICK] * state.params.advert_interval_s
+            raise PluginError(f"the winner rule {plugin_name(state.rule_kernel)!r} scored the bid of UAV "
+                              f"{state.counters[engine.REFUSED_UAV]} at t = {t:g} s NaN or infinite; "
+                              "a rule's score must be a finite number")
         if status == engine.INVALID_STATE:
             bad = np.flatnonzero(np.isnan(state.fleet.next_s)).tolist()
             raise InvalidStateError(
@@ -235,6 +245,22 @@ def advance(state: RunState, t_stop: float) -> None:
         raise SupervisorError(
             f"the supervisor does not allow event {event!r} for UAV {i} in local state(s) "
             f"{state.fleet.sup[i].tolist()}; the engine stopped before taking it")
+
+
+def _advance_plugin(state, args):
+    """``engine.advance`` with the plugin rule of ``state``; what the plugin raises is a PluginError.
+
+    The engine itself reports its failures as statuses: an exception comes from the plugin.
+    """
+    name = plugin_name(state.rule_kernel)
+    try:
+        return interrupt.call(engine.advance, *args, state.rule_kernel, argtypes=engine.plugin_argtypes(args),
+                              culprit=f"the winner rule {name!r}")
+    except Exception as error:
+        frame = traceback.extract_tb(error.__traceback__)[-1]
+        message = " ".join(str(error).split())  # one line
+        raise PluginError(f"the winner rule {name!r} raised {type(error).__name__}: {message} "
+                          f"({Path(frame.filename).name}, line {frame.lineno})") from None
 
 
 def snapshot(state: RunState, t: float) -> dict[str, Any]:

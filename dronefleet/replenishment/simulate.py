@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import interrupt
 from ..supervisor import Automaton, load_supervisor
 from . import kernel
 from .params import V_MIN, V_MOVE, Params
@@ -174,8 +175,8 @@ def simulate(params: Params, trials: int | None = None, *, first_trial: int = 1,
     rates = np.array([V_MIN, V_MOVE, params.v_work, params.v_charge, params.transfer_loss,
                       params.worker_capacity, params.charger_capacity], dtype=np.float64)
     (points, consumed, work_energy, shared, lost, depleted, battery, drawn, paid, given,
-     received, series, trace_arrays, track_arrays) = kernel.run_trials(
-        rates, params.n_workers, params.n_chargers, params.ticks, params.sample_every,
+     received, series, trace_arrays, track_arrays) = interrupt.call(
+        kernel.run_trials, rates, params.n_workers, params.n_chargers, params.ticks, params.sample_every,
         params.mobile, wheel_noise, tables, n_sup, init, unc, n_unc, ctrl, n_ctrl,
         _mc_rank(params.n_chargers), _rng_states(seeds), trace, track)
 

@@ -1,0 +1,179 @@
+"""Ctrl-C at any moment of a command: "interrupted", exit code 130, nothing half-written, no traceback.
+
+Real processes are sent SIGINT at chosen moments: while a compiled kernel runs (each scenario's,
+a plugin rule's that never returns), while a plugin module is imported, in a sweep and in
+``reproduce`` (whose workers get the terminal's Ctrl-C too). The moment is not a guess of the
+clock: a kernel runs in a thread of its own (dronefleet.interrupt), so the tests wait until
+threads other than the main one have used CPU time, in a run made far too long to end first.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import dronefleet
+
+REPO = Path(dronefleet.__file__).resolve().parent.parent
+CONFIGS = REPO / "configs"
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="reads threads' CPU time in /proc")
+
+#: CPU time the kernel threads must have used before Ctrl-C [clock ticks, 1/100 s on Linux]: they run.
+KERNEL_TICKS = 30
+
+NEVER_RETURNS = '''
+from numba import njit
+
+
+@njit
+def spin(f, w_norm, soc, theta, rng):
+    x = 0.0
+    while x >= 0.0:  # never ends
+        x += 1.0
+    return True, x
+
+
+spin.bids_on = "any"
+'''
+
+HANGS_ON_IMPORT = '''
+from pathlib import Path
+
+Path(__file__).with_name("importing").write_text("")
+while True:
+    pass
+'''
+
+
+def _cpu(stat):
+    """User + system CPU time [clock ticks] of a /proc stat file."""
+    fields = Path(stat).read_text().rsplit(")", 1)[1].split()
+    return int(fields[11]) + int(fields[12])
+
+
+def _kernel_ticks(pid):
+    """CPU time of the process ``pid``'s threads other than its main one, ended ones included [ticks]."""
+    try:
+        return _cpu(f"/proc/{pid}/stat") - _cpu(f"/proc/{pid}/task/{pid}/stat")
+    except (FileNotFoundError, ProcessLookupError):
+        return 0
+
+
+def _children(pid):
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except FileNotFoundError:
+        return []
+
+
+def _start(args, cwd, path=None, group=False):
+    """``python -m dronefleet ARGS`` (``path`` first on its module path) with Ctrl-C handled as in a
+    terminal (a process started in the background of a non-interactive shell would ignore it)."""
+    env = dict(os.environ)
+    if path is not None:
+        env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(path), env.get("PYTHONPATH"))))
+    return subprocess.Popen(
+        [sys.executable, "-m", "dronefleet", *args], cwd=cwd, text=True, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, env=env, start_new_session=group,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+
+
+def _wait_until(process, ready, limit_s=600):
+    """Poll ``ready()`` until true; fail if the process ends first (limit: a hang, not a measure)."""
+    deadline = time.monotonic() + limit_s
+    while not ready():
+        if process.poll() is not None:
+            pytest.fail(f"ended before the moment to interrupt it: rc {process.returncode}\n"
+                        f"{process.communicate()[1]}")
+        assert time.monotonic() < deadline, "the moment to interrupt never came"
+        time.sleep(0.05)
+
+
+def _interrupted(process, group=False):
+    """Send Ctrl-C (to the process group: as the terminal does); its stderr lines once it ended."""
+    if group:
+        os.killpg(process.pid, signal.SIGINT)
+    else:
+        process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)  # a hang, not a measure
+    assert process.returncode == 130, err
+    assert "Traceback" not in err and "Error" not in err, err
+    return err.splitlines()
+
+
+def _leftovers(folder):
+    """Hidden temporary files and folders under ``folder`` (an interrupted write's)."""
+    return [p for p in Path(folder).rglob(".*") if p.name.endswith((".tmp", ".old"))]
+
+
+@pytest.mark.parametrize("args", [
+    pytest.param(["run", str(CONFIGS / "replenishment.toml"), "--set", "trials=2000"], id="replenishment"),
+    pytest.param(["run", "--set", "horizon_weeks=90", "--set", "n_uavs=100"], id="delivery"),
+])
+def test_ctrl_c_in_a_compiled_kernel_is_a_clean_interruption(args, tmp_path):
+    process = _start([*args, "--out", str(tmp_path / "out")], tmp_path)
+    _wait_until(process, lambda: _kernel_ticks(process.pid) >= KERNEL_TICKS)
+    assert _interrupted(process) == ["dronefleet: interrupted"]
+    assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_a_plugin_rule_that_never_returns_is_named_and_left_behind(tmp_path):
+    (tmp_path / "spinning.py").write_text(NEVER_RETURNS)
+    process = _start(["run", "--set", "rule=spinning:spin", "--set", "horizon_weeks=1", "--out",
+                      str(tmp_path / "out")], tmp_path, path=tmp_path)
+    _wait_until(process, lambda: _kernel_ticks(process.pid) >= KERNEL_TICKS)
+    lines = _interrupted(process)
+    assert len(lines) == 1 and lines[0].startswith("dronefleet: interrupted but the winner rule 'spinning:spin' "
+                                                   "did not stop within"), lines
+    assert not (tmp_path / "out").exists()
+
+
+def test_ctrl_c_while_a_plugin_module_hangs_on_import_names_it(tmp_path):
+    (tmp_path / "hanging.py").write_text(HANGS_ON_IMPORT)
+    process = _start(["run", "--set", "rule=hanging:rule", "--out", str(tmp_path / "out")], tmp_path,
+                     path=tmp_path)
+    _wait_until(process, (tmp_path / "importing").exists)
+    assert _interrupted(process) == [
+        "dronefleet: interrupted while importing module 'hanging' of winner rule 'hanging:rule'"]
+    assert not (tmp_path / "out").exists()
+
+
+SWEEP = """
+[sweep]
+name = "long"
+scenario = "replenishment"
+[set]
+trials = 1
+sample_every = 1000
+[grid]
+ticks = [60, 50000000]
+"""
+
+
+@pytest.mark.parametrize("group", [True, False], ids=["terminal", "parent-only"])
+def test_ctrl_c_of_a_sweep_keeps_the_runs_done_and_stops_its_workers(group, tmp_path):
+    # The first run (60 ticks) runs in the command's process, the second (years of ticks) in a
+    # worker, which the terminal's Ctrl-C reaches too, but a `kill -INT` of the command does not.
+    (tmp_path / "long.toml").write_text(SWEEP)
+    results = tmp_path / "results"
+    process = _start(["sweep", "run", "long.toml", "--results", str(results), "--jobs", "2"], tmp_path, group=True)
+    _wait_until(process, lambda: any(_kernel_ticks(child) >= KERNEL_TICKS for child in _children(process.pid)))
+    lines = _interrupted(process, group=group)
+    assert any("interrupted" in line for line in lines), lines
+    summaries = sorted(p.relative_to(results / "long") for p in results.rglob("summary/**/*.parquet"))
+    assert [p.parts[1] for p in summaries] == ["ticks=60"], summaries
+    assert not (results / "long" / "_failed").exists()
+    assert _leftovers(results) == []
+
+
+def test_ctrl_c_of_reproduce_in_a_kernel_is_a_clean_interruption(tmp_path):
+    process = _start(["reproduce", "fig09", "--quick", "--jobs", "1", "--out", str(tmp_path / "results")], tmp_path)
+    _wait_until(process, lambda: _kernel_ticks(process.pid) >= KERNEL_TICKS)
+    assert _interrupted(process) == ["dronefleet: interrupted"]
+    assert _leftovers(tmp_path) == []
+    assert not (tmp_path / "results" / "quick" / "fig09").exists()  # the figure comes after its runs

@@ -9,8 +9,21 @@ From Python: ``dronefleet.run(...)`` simulates one run, ``dronefleet.sweep(grid,
 grid of runs, of any scenario (:mod:`dronefleet.api`).
 """
 
+from typing import TYPE_CHECKING, Any
+
 __version__ = "0.1.0"
 
-from .api import Run, run, sweep
-
 __all__ = ["Run", "__version__", "run", "sweep"]
+
+if TYPE_CHECKING:
+    from .api import Run, run, sweep
+
+
+def __getattr__(name: str) -> Any:
+    # The API is imported on first use, not with the package: the command line (dronefleet.__main__)
+    # imports its modules where a Ctrl-C can be answered, and `import dronefleet.config` stays light.
+    if name in ("Run", "run", "sweep"):
+        from . import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'dronefleet' has no attribute {name!r}")

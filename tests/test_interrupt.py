@@ -177,3 +177,26 @@ def test_ctrl_c_of_reproduce_in_a_kernel_is_a_clean_interruption(tmp_path):
     assert _interrupted(process) == ["dronefleet: interrupted"]
     assert _leftovers(tmp_path) == []
     assert not (tmp_path / "results" / "quick" / "fig09").exists()  # the figure comes after its runs
+
+
+LOADING = '''
+import builtins, os, signal, sys
+real_import = builtins.__import__
+
+def import_then_ctrl_c(name, *args, **kwargs):
+    if name == "cli":  # dronefleet.__main__ loads the command's modules
+        os.kill(os.getpid(), signal.SIGINT)
+    return real_import(name, *args, **kwargs)
+
+builtins.__import__ = import_then_ctrl_c
+from dronefleet.__main__ import main
+sys.exit(main())
+'''
+
+
+def test_ctrl_c_while_the_command_loads_its_modules_is_interrupted(tmp_path):
+    # the console script and python -m both enter through dronefleet.__main__.main
+    done = subprocess.run([sys.executable, "-c", LOADING, "run", "--out", str(tmp_path / "out")],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert (done.returncode, done.stderr) == (130, "dronefleet: interrupted\n")
+    assert not (tmp_path / "out").exists()

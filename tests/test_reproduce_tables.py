@@ -119,7 +119,8 @@ def test_check_refuses_a_delivery_runs_table_it_cannot_compare_before_any_run(ch
 
 
 @pytest.mark.parametrize("column, value, fragment", [
-    ("ticks", 10**12, "the configuration strategy=fixed cannot be re-run: trials x (ticks"),  # days of running
+    ("ticks", 10**12, "ticks = 1000000000000"),  # past the upper limit of one trial
+    ("ticks", 10**8, "robot-ticks"),  # each trial allowed, all of them together days of running
     ("work_ratio", -1.0, "work_ratio"),
     ("charge_rate", float("nan"), "column 'charge_rate' holds nan at row 0"),
     ("trial", 0, "first_trial = 0 is out of range"),

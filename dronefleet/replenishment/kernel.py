@@ -9,7 +9,7 @@ a trial's outcome does not depend on which other trials run beside it.
 
 Only + - * / sqrt and the project's own transcendental functions
 (:mod:`dronefleet.fpmath`) touch the trajectory, so it is bit-identical on any
-CPU. Random numbers come from xoshiro256** streams (``rng[trial, stream]``).
+CPU. Random numbers come from xoshiro256** streams (``rng[trial, stream]``, :mod:`dronefleet.rng`).
 
 Most robots stand still most ticks, so work whose inputs did not change is
 reused rather than redone, never approximated: pair geometry only for pairs
@@ -27,7 +27,8 @@ the controllable events' actions (5.3).
 import numpy as np
 from numba import njit
 
-from ..fpmath import atan2, cos, log, sin
+from ..fpmath import atan2, cos, sin
+from ..rng import normal_pair, uniform
 
 # Event codes: the columns of the kernel's transition tables (names without EV_).
 EVENT_NAMES = ("moveToWork", "work", "moveToCharge", "charge", "shareEnergy",
@@ -85,47 +86,6 @@ NO_TURN = 10.0 / 180.0 * PI
 # below tan(10 deg) = 0.17633: |fy| <= this * fx (fx > 0) puts the angle below 9.999 deg
 NO_TURN_SLOPE = 0.1763
 APPROACH_CM = 8.07       # the worker with MC stops this far from its provider [cm]
-
-
-# ------------------------------------------------------------------ random numbers
-
-
-@njit(cache=True)
-def _rotl(x, k):
-    return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
-
-
-@njit(cache=True, inline='always')
-def next_u64(rng, trial, stream):
-    """xoshiro256** step of ``rng[trial, stream]`` (uint64[4]); returns uint64."""
-    s0 = rng[trial, stream, 0]
-    s1 = rng[trial, stream, 1]
-    s2 = rng[trial, stream, 2] ^ s0
-    s3 = rng[trial, stream, 3] ^ s1
-    result = _rotl(s1 * np.uint64(5), 7) * np.uint64(9)
-    rng[trial, stream, 0] = s0 ^ s3
-    rng[trial, stream, 1] = s1 ^ s2
-    rng[trial, stream, 2] = s2 ^ (s1 << np.uint64(17))
-    rng[trial, stream, 3] = _rotl(s3, 45)
-    return result
-
-
-@njit(cache=True, inline='always')
-def uniform(rng, trial, stream):
-    """Uniform double in [0, 1) with 53 random bits."""
-    return np.float64(next_u64(rng, trial, stream) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
-
-
-@njit(cache=True, inline='always')
-def normal_pair(rng, trial, stream):
-    """Two independent N(0, 1) draws (Marsaglia's polar method: one log, no sin/cos)."""
-    while True:
-        u = 2.0 * uniform(rng, trial, stream) - 1.0
-        v = 2.0 * uniform(rng, trial, stream) - 1.0
-        r2 = u * u + v * v
-        if 0.0 < r2 < 1.0:
-            m = np.sqrt(-2.0 * log(r2) / r2)
-            return u * m, v * m
 
 
 # ------------------------------------------------------------------ geometry

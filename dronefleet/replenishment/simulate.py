@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from .. import interrupt
+from ..rng import spawn_states
 from ..supervisor import Automaton, load_supervisor
 from . import kernel
 from .params import V_MIN, V_MOVE, Params
@@ -45,15 +46,6 @@ def _default_supervisor(name):
 def trial_seeds(trials: int, first: int = 1) -> np.ndarray:
     """Seeds 876 k of trials k = first .. first + trials - 1 (int64 array)."""
     return TRIAL_SEED_FACTOR * np.arange(first, first + trials, dtype=np.int64)
-
-
-def _rng_states(seeds):
-    """xoshiro256** states (len(seeds), N_STREAMS, 4): one SeedSequence child per stream."""
-    states = np.empty((len(seeds), kernel.N_STREAMS, 4), dtype=np.uint64)
-    for row, seed in enumerate(seeds):
-        for stream, child in enumerate(np.random.SeedSequence(int(seed)).spawn(kernel.N_STREAMS)):
-            states[row, stream] = child.generate_state(4, dtype=np.uint64)
-    return states
 
 
 def _role_tables(automata):
@@ -178,7 +170,7 @@ def simulate(params: Params, trials: int | None = None, *, first_trial: int = 1,
      received, series, trace_arrays, track_arrays) = interrupt.call(
         kernel.run_trials, rates, params.n_workers, params.n_chargers, params.ticks, params.sample_every,
         params.mobile, wheel_noise, tables, n_sup, init, unc, n_unc, ctrl, n_ctrl,
-        _mc_rank(params.n_chargers), _rng_states(seeds), trace, track)
+        _mc_rank(params.n_chargers), spawn_states(seeds, kernel.N_STREAMS), trace, track)
 
     nw = params.n_workers
     total = consumed.sum(axis=1)

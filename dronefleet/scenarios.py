@@ -66,6 +66,7 @@ Where each scenario's pieces are:
   engine, metrics, fleet, analysis, figures), with its schema in :mod:`dronefleet.delivery.config`.
 * ``replenishment``: :mod:`dronefleet.replenishment.scenario` over the subpackage
   (params, simulate, kernel, bounds).
+* ``items``: :mod:`dronefleet.items.scenario` over the subpackage (params, simulate, kernel).
 
 Registering is one entry in :data:`SCENARIOS`: a plain dict, no import by string; each entry
 imports its module only when first used, so ``dronefleet --help`` stays cheap.
@@ -204,9 +205,16 @@ def _replenishment() -> ModuleType:
     return scenario
 
 
+def _items() -> ModuleType:
+    from .items import scenario
+
+    return scenario
+
+
 SCENARIOS: dict[str, Scenario] = {
     "delivery": Scenario("delivery", _delivery),
     "replenishment": Scenario("replenishment", _replenishment),
+    "items": Scenario("items", _items),
 }
 
 

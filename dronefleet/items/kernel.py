@@ -1,0 +1,466 @@
+"""Compiled kernel of the item-delivery / foraging model (docs/items-model.md), vectorised over trials.
+
+One call of :func:`run_trials` runs every trial of one configuration (one (n, c, s) cell of an
+experiment): each trial seeds its own streams from its root seed, draws its world, and steps
+t = 1..T in the order of the spec's section 8. State is a structure of plain arrays indexed by
+node (0 = home, 1..m = locations, row-major on the IDP grid) or robot (0..n-1).
+
+Only + - * / sqrt, floor/ceil and :mod:`dronefleet.fpmath` ``exp``/``log`` touch the trajectory;
+random numbers come from :mod:`dronefleet.rng` streams, so a run is bit-identical on any CPU.
+Streams per trial (spec section 10): ``STREAM_WORLD`` (a) positions then true parameters,
+``STREAM_GENERATION`` (b) the truth's draws (Bernoulli, Poisson, logistic noise), and one stream
+per robot (c), ``STREAM_ROBOT + i``. Seeded from the trial's root seed and the stream's key, they
+are the same for every algorithm, n, c and s: trials with the same index are paired.
+"""
+
+import numpy as np
+
+from ..fpmath import exp, log
+from ..jit import njit
+from ..rng import normal_pair, seed_stream, uniform
+
+# Modes, truths, algorithms, CAS variants (the ints the Python layer passes in ``opts``).
+MODE_FP, MODE_IDP = 0, 1
+BERNOULLI, POISSON, LOGISTIC = 0, 1, 2
+ALG_R, ALG_GR, ALG_GRIC, ALG_CAS, ALG_AS, ALG_ASTC, ALG_SF = 0, 1, 2, 3, 4, 5, 6
+CAS_MAX_EXPECTED, CAS_RATE, CAS_GR_NO_EARMARK = 0, 1, 2
+
+# Integer options, float parameters: indices into ``opts`` and ``pars``.
+(O_MODE, O_TRUTH, O_ALG, O_CAS, O_GR_CAP_MAX, O_TIES_LOWEST, O_PRIVATE, O_OBS_REAL,
+ O_COUNT_PICKUP, O_RESAMPLE, O_STEPS, O_CAPACITY, O_ROBOTS, O_DRAW_POSITIONS, O_DRAW_PARAMS) = range(15)
+N_OPTS = 15
+(P_SPEED, P_PV, P_KP, P_RATE, P_K, P_LG, P_SE, P_X0, P_MMIN,
+ P_MEAN, P_SD, P_LOW, P_HIGH) = range(13)
+N_PARS = 13
+
+# Streams per trial: world (a), generation (b), then one per robot (c).
+STREAM_WORLD, STREAM_GENERATION, STREAM_ROBOT = 0, 1, 2
+
+# Per-trial outputs (columns of ``totals``) and per-robot ones (last axis of ``per_robot``).
+T_GENERATED, T_SERVED, T_VISITS, T_TRIPS, T_PICKED = range(5)
+N_TOTALS = 5
+R_TRIPS, R_VISITS, R_ITEMS = range(3)
+N_PER_ROBOT = 3
+# Trace columns (per step and robot): node (-1 in transit), destination, steps left, payload y.
+TR_NODE, TR_DEST, TR_LEFT, TR_Y = range(4)
+
+STAY = -1
+TIE_REL = 1e-12            # A25: values within 1e-12 relative are equal
+TRAVEL_GUARD = 1e-9        # A6: ceil(D/s - 1e-9), float noise never adds a step
+POISSON_CHUNK = 16.0       # Poisson(lambda) as a sum of ceil(lambda/16) inversions (exp(-16) >> underflow)
+NEVER = np.int64(1) << np.int64(62)   # "k = infinity" (ASTC), a sleeping step that never comes
+
+
+# ------------------------------------------------------------------ samplers and geometry
+
+
+@njit(cache=True)
+def poisson_parts(lam):
+    """(parts, mean of a part, exp(-mean)) of Poisson(lam) drawn as a sum of inversions."""
+    parts = max(1, int(np.ceil(lam / POISSON_CHUNK)))
+    mu = lam / parts
+    return parts, mu, exp(-mu)
+
+
+@njit(cache=True)
+def poisson(rng, trial, stream, parts, mu, e_mu):
+    """Poisson(parts * mu) by inversion of each part: one uniform per part, a fixed number
+    per draw, so the stream stays aligned whatever the values; ``e_mu`` = exp(-mu)."""
+    total = 0
+    for _ in range(parts):
+        u = uniform(rng, trial, stream)
+        k = 0
+        p = e_mu
+        cdf = p
+        while u > cdf and p > 0.0:
+            k += 1
+            p = p * mu / k
+            cdf += p
+        total += k
+    return total
+
+
+@njit(cache=True)
+def travel_time(ax, ay, bx, by, speed):
+    """t(a, b) [steps] = max(1, ceil(D/s - 1e-9)) for distinct nodes (A6); 0 for the same node."""
+    dx = ax - bx
+    dy = ay - by
+    steps = int(np.ceil(np.sqrt(dx * dx + dy * dy) / speed - TRAVEL_GUARD))
+    return max(1, steps)
+
+
+@njit(cache=True)
+def travel_table(pos, speed, out):
+    """``out[a, b]`` = t(a, b) for nodes at ``pos`` (M1, 2); 0 on the diagonal."""
+    m1 = pos.shape[0]
+    for a in range(m1):
+        out[a, a] = 0
+        for b in range(a + 1, m1):
+            steps = travel_time(pos[a, 0], pos[a, 1], pos[b, 0], pos[b, 1], speed)
+            out[a, b] = steps
+            out[b, a] = steps
+
+
+@njit(cache=True)
+def predict(truth, rate, big_k, growth, observed, observed_at, tau):
+    """D_hat_j(tau) from the model's (O_j, t_j) (section 5): linear for Bernoulli (p_hat) and
+    Poisson (lam_hat), the closed-form logistic for logistic (A14, 0 if O_j = 0)."""
+    if truth == LOGISTIC:
+        if observed <= 0.0:
+            return 0.0
+        return big_k / (1.0 + ((big_k - observed) / observed) * exp(-growth * (tau - observed_at)))
+    return observed + rate * (tau - observed_at)
+
+
+@njit(cache=True)
+def greater(u, w):
+    """u > w by more than TIE_REL relative (A25): otherwise the two are equal."""
+    return u > w and (u - w) > TIE_REL * max(abs(u), abs(w))
+
+
+@njit(cache=True)
+def astc_wait(big_k, growth, target, observed, observed_at, t, out_time):
+    """ASTC's k: the smallest integer k >= 1 with D_hat_a(t + k + t(0, a)) >= target, from the
+    closed form then checked against the prediction (7.6); NEVER if target >= K or O_a = 0."""
+    if target >= big_k or observed <= 0.0:
+        return NEVER
+    if observed >= target:
+        return 1
+    a = (big_k - observed) / observed
+    k = int(np.ceil(observed_at + log(a / (big_k / target - 1.0)) / growth - t - out_time))
+    k = max(1, k)
+    while predict(LOGISTIC, 0.0, big_k, growth, observed, observed_at, t + k + out_time) < target:
+        k += 1
+    while k > 1 and predict(LOGISTIC, 0.0, big_k, growth, observed, observed_at, t + k - 1 + out_time) >= target:
+        k -= 1
+    return k
+
+
+# ------------------------------------------------------------------ decisions (section 7)
+
+
+@njit(cache=True)
+def uniform_candidate(a, m, rng, stream):
+    """A location 1..m other than ``a`` (0: home, every location is one), uniform; STAY if none."""
+    count = m - 1 if a > 0 else m
+    if count <= 0:
+        return STAY
+    b = 1 + int(uniform(rng, 0, stream) * count)
+    if a > 0 and b >= a:
+        b += 1
+    return b
+
+
+@njit(cache=True)
+def decide(i, t, a, opts, pars, travel, observed, observed_at, earmark, y, assigned, owner, leave_at, rng):
+    """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
+
+    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (M1,) the model row the robot
+    reads; ``earmark`` (M1,) sum of c - y_r over robots heading to each node (7.2, A27; the robot
+    itself counts only at its own node, never a candidate); ``y`` (n,) payloads; ``assigned`` (n,)
+    AS/ASTC/SF locations (0: none); ``owner`` (M1,) the robot + 1 assigned to a location (0: none);
+    ``leave_at`` (n,) SF's step to leave home; draws come from ``rng[0, STREAM_ROBOT + i]``.
+    """
+    algorithm = opts[O_ALG]
+    capacity = opts[O_CAPACITY]
+    m = travel.shape[0] - 1
+    stream = STREAM_ROBOT + i
+    yi = y[i]
+    truth = opts[O_TRUTH]
+    rate, big_k, growth = pars[P_RATE], pars[P_K], pars[P_LG]
+    target = 0.5 * big_k + capacity
+    if algorithm == ALG_R:
+        if yi == capacity:
+            return 0 if a > 0 else STAY
+        if yi == 0 or uniform(rng, 0, stream) < pars[P_PV]:
+            return uniform_candidate(a, m, rng, stream)
+        return 0 if a > 0 else STAY
+    if algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF:
+        if a > 0:
+            return 0                     # foraged on arrival; home again
+        own = assigned[i]
+        if own == 0:
+            return STAY                  # more robots than locations: sleeps for ever
+        if algorithm == ALG_SF:
+            return own if t >= leave_at[i] else STAY
+        out_time = travel[0, own]
+        if predict(truth, rate, big_k, growth, observed[own], observed_at[own], t + out_time) >= target:
+            return own
+        if algorithm == ALG_AS:
+            return STAY
+        k = astc_wait(big_k, growth, target, observed[own], observed_at[own], t, out_time)
+        count = 0
+        for b in range(1, m + 1):
+            if owner[b] == 0 and travel[0, b] + travel[b, 0] < k:
+                count += 1
+        if count == 0:
+            return STAY
+        pick = int(uniform(rng, 0, stream) * count)
+        for b in range(1, m + 1):
+            if owner[b] == 0 and travel[0, b] + travel[b, 0] < k:
+                if pick == 0:
+                    return b
+                pick -= 1
+        return STAY
+    # GR, GRIC, CAS: the best candidate against a baseline (A25 ties)
+    if yi == capacity and a > 0:
+        return 0
+    variant = opts[O_CAS]
+    sweeper = algorithm == ALG_CAS and variant != CAS_GR_NO_EARMARK
+    if sweeper or a == 0:
+        baseline, fallback = 0.0, STAY
+    else:
+        baseline, fallback = yi / travel[a, 0], 0
+    uncapped = algorithm == ALG_GRIC or algorithm == ALG_CAS
+    earmarks = algorithm != ALG_CAS
+    best, best_value, best_time, ties = STAY, 0.0, 0, 0
+    for b in range(1, m + 1):
+        if b == a:
+            continue
+        time = travel[a, b]
+        expected = predict(truth, rate, big_k, growth, observed[b], observed_at[b], t + time)
+        if sweeper:
+            value = expected / time if variant == CAS_RATE else expected
+        else:
+            extra = max(0.0, expected - earmark[b]) if earmarks else max(0.0, expected)
+            load = yi + extra
+            if not uncapped:
+                load = max(capacity, load) if opts[O_GR_CAP_MAX] else min(capacity, load)
+            value = load / (time + travel[b, 0])
+        if not greater(value, baseline):
+            continue                     # the baseline keeps ties
+        if best == STAY or greater(value, best_value):
+            best, best_value, best_time, ties = b, value, time, 1
+        elif not greater(best_value, value):
+            if time < best_time:
+                best, best_value, best_time, ties = b, value, time, 1
+            elif time == best_time and not opts[O_TIES_LOWEST]:
+                ties += 1                # one-pass reservoir: each tied location kept w.p. 1/ties
+                if uniform(rng, 0, stream) * ties < 1.0:
+                    best, best_value = b, value
+    return best if best != STAY else fallback
+
+
+# ------------------------------------------------------------------ one trial
+
+
+@njit(cache=True)
+def draw_world(opts, pars, m, rng, pos, truth_par):
+    """Stream (a) of a trial: FP positions (x then y per location, index order) if drawn, then
+    the m normal deviates of the true parameters mean + sd z, clipped to [low, high] or redrawn
+    (A10); logistic draws none. ``pos`` (M1, 2), ``truth_par`` (M1,) filled in place."""
+    if opts[O_DRAW_POSITIONS]:
+        for j in range(1, m + 1):
+            pos[j, 0] = uniform(rng, 0, STREAM_WORLD)
+            pos[j, 1] = uniform(rng, 0, STREAM_WORLD)
+    if not opts[O_DRAW_PARAMS] or opts[O_TRUTH] == LOGISTIC:
+        return
+    mean, sd, low, high = pars[P_MEAN], pars[P_SD], pars[P_LOW], pars[P_HIGH]
+    spare, have = 0.0, False
+    for j in range(1, m + 1):
+        while True:
+            if have:
+                z, have = spare, False
+            else:
+                z, spare = normal_pair(rng, 0, STREAM_WORLD)
+                have = True
+            value = mean + sd * z
+            if opts[O_RESAMPLE] and (value < low or value > high):
+                continue
+            break
+        truth_par[j] = min(max(value, low), high)
+
+
+@njit(cache=True, nogil=True)
+def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace, trace_counts, stop):
+    """Every trial of one configuration; results written into ``totals`` (trials, N_TOTALS) and
+    ``per_robot`` (trials, n, N_PER_ROBOT), int64.
+
+    ``seeds`` (trials,) root seeds; ``grid_pos`` (M1, 2) node positions (IDP grid, or the given
+    world of a test; FP positions are drawn unless ``opts[O_DRAW_POSITIONS]`` is 0);
+    ``given_par`` (M1,) true parameters used when ``opts[O_DRAW_PARAMS]`` is 0. ``trace``
+    (T + 1, n, 4) and ``trace_counts`` (T + 1, M1) record the first trial step by step when
+    their first axis is not empty (tests, replay). ``stop`` (1,) int8: Ctrl-C, checked every step.
+    """
+    mode, truth, algorithm = opts[O_MODE], opts[O_TRUTH], opts[O_ALG]
+    steps, capacity, n = opts[O_STEPS], opts[O_CAPACITY], opts[O_ROBOTS]
+    m1 = grid_pos.shape[0]
+    m = m1 - 1
+    foraging = mode == MODE_FP
+    private = opts[O_PRIVATE] != 0
+    big_k, growth, noise = pars[P_K], pars[P_LG], pars[P_SE]
+    m_min, x0 = pars[P_MMIN], pars[P_X0]
+    target = 0.5 * big_k + capacity
+    uses_assignment = algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF
+
+    rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
+    pos = grid_pos.copy()
+    travel = np.empty((m1, m1), dtype=np.int32)
+    travel_table(pos, pars[P_SPEED], travel)
+    truth_par = given_par.copy()
+    parts = np.ones(m1, dtype=np.int64)
+    part_mean = np.zeros(m1)
+    part_exp = np.ones(m1)
+    count = np.zeros(m1, dtype=np.int64)
+    population = np.zeros(m1)
+    rows = n if private else 1
+    observed = np.zeros((rows, m1))
+    observed_at = np.zeros((rows, m1))
+    earmark = np.zeros(m1)
+    owner = np.zeros(m1, dtype=np.int64)
+    node = np.zeros(n, dtype=np.int64)
+    dest = np.zeros(n, dtype=np.int64)
+    left = np.zeros(n, dtype=np.int64)
+    y = np.zeros(n, dtype=np.int64)
+    assigned = np.zeros(n, dtype=np.int64)
+    sleep = np.zeros(n, dtype=np.int64)
+    leave_at = np.zeros(n, dtype=np.int64)
+    arrived = np.zeros(n, dtype=np.bool_)
+    tracing = trace.shape[0] > 0
+
+    for tr in range(seeds.shape[0]):
+        if stop[0] != 0:
+            break
+        for s in range(STREAM_ROBOT + n):
+            seed_stream(rng, 0, s, seeds[tr], s)
+        draw_world(opts, pars, m, rng, pos, truth_par)
+        if opts[O_DRAW_POSITIONS]:
+            travel_table(pos, pars[P_SPEED], travel)
+        if truth == POISSON:
+            for j in range(1, m1):
+                parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
+        count[:] = 0
+        population[:] = x0
+        observed[:, :] = x0 if truth == LOGISTIC else 0.0
+        observed_at[:, :] = 0.0
+        earmark[:] = 0.0
+        owner[:] = 0
+        node[:] = 0
+        y[:] = 0
+        assigned[:] = 0
+        sleep[:] = 0
+        leave_at[:] = 0
+        arrived[:] = False
+        generated = 0
+        served = 0
+        picked = 0
+        removed = 0.0
+        for i in range(n):
+            for col in range(N_PER_ROBOT):
+                per_robot[tr, i, col] = 0
+        if uses_assignment:              # A17: in id order, uniform among the locations not yet taken
+            for i in range(min(n, m)):
+                free = m - i
+                pick = int(uniform(rng, 0, STREAM_ROBOT + i) * free)
+                for j in range(1, m1):
+                    if owner[j] == 0:
+                        if pick == 0:
+                            owner[j] = i + 1
+                            assigned[i] = j
+                            break
+                        pick -= 1
+        spare, have = 0.0, False
+        for t in range(0, steps + 1):
+            if stop[0] != 0:
+                break
+            if t > 0:
+                # 1. generation, every location in index order
+                for j in range(1, m1):
+                    if truth == BERNOULLI:
+                        if uniform(rng, 0, STREAM_GENERATION) < truth_par[j]:
+                            count[j] += 1
+                            generated += 1
+                    elif truth == POISSON:
+                        arrivals = poisson(rng, 0, STREAM_GENERATION, parts[j], part_mean[j], part_exp[j])
+                        count[j] += arrivals
+                        generated += arrivals
+                    else:
+                        if have:
+                            z, have = spare, False
+                        else:
+                            z, spare = normal_pair(rng, 0, STREAM_GENERATION)
+                            have = True
+                        x = population[j]
+                        x = x + (growth * x * (1.0 - x / big_k) + 0.5 * noise * noise * x) + noise * x * z
+                        population[j] = max(0.0, x)
+                # 2. movement
+                for i in range(n):
+                    if node[i] < 0:
+                        left[i] -= 1
+                        if left[i] == 0:
+                            node[i] = dest[i]
+                            arrived[i] = True
+            # 3. robots at a node, in id order: serve, observe, decide
+            for i in range(n):
+                a = node[i]
+                if a < 0:
+                    continue
+                row = i if private else 0
+                if a == 0:
+                    if arrived[i]:
+                        per_robot[tr, i, R_TRIPS] += 1
+                        if algorithm == ALG_SF:
+                            leave_at[i] = t + sleep[i]     # A29: the arrival step is the first sleep step
+                    if foraging and not opts[O_COUNT_PICKUP]:
+                        served += y[i]
+                        per_robot[tr, i, R_ITEMS] += y[i]
+                    y[i] = 0
+                else:
+                    if arrived[i]:
+                        per_robot[tr, i, R_VISITS] += 1
+                    free = capacity - y[i]
+                    if truth == LOGISTIC:
+                        stock = np.floor(population[a])
+                        if algorithm == ALG_SF and arrived[i] and a == assigned[i]:
+                            sleep[i] = max(0, int(np.floor(sleep[i] + pars[P_KP] * (target - stock) + 0.5)))
+                        k = min(free, max(0, int(stock - m_min)))
+                        population[a] -= k
+                        removed += k
+                        seen = population[a] if opts[O_OBS_REAL] else np.floor(population[a])
+                    else:
+                        k = min(free, count[a])
+                        count[a] -= k
+                        seen = count[a]
+                    y[i] += k
+                    earmark[a] -= k
+                    picked += k
+                    if not foraging or opts[O_COUNT_PICKUP]:
+                        served += k
+                        per_robot[tr, i, R_ITEMS] += k
+                    observed[row, a] = seen
+                    observed_at[row, a] = t
+                arrived[i] = False
+                b = decide(i, t, a, opts, pars, travel, observed[row], observed_at[row], earmark, y,
+                           assigned, owner, leave_at, rng)
+                if b != STAY and b != a:
+                    on_board = capacity - y[i]
+                    if a > 0:
+                        earmark[a] -= on_board
+                    if b > 0:
+                        earmark[b] += on_board
+                    node[i] = -1
+                    dest[i] = b
+                    left[i] = travel[a, b]
+            if tracing and tr == 0:
+                for i in range(n):
+                    trace[t, i, TR_NODE] = node[i]
+                    trace[t, i, TR_DEST] = dest[i] if node[i] < 0 else node[i]
+                    trace[t, i, TR_LEFT] = left[i] if node[i] < 0 else 0
+                    trace[t, i, TR_Y] = y[i]
+                for j in range(m1):
+                    trace_counts[t, j] = population[j] if truth == LOGISTIC else count[j]
+        if truth == LOGISTIC:            # A19: net growth of the stock, foraged included
+            stock = 0.0
+            for j in range(1, m1):
+                stock += population[j]
+            generated = int(np.floor(stock + removed - m * x0))
+        totals[tr, T_GENERATED] = generated
+        totals[tr, T_SERVED] = served
+        totals[tr, T_PICKED] = picked
+        visits = 0
+        trips = 0
+        for i in range(n):
+            visits += per_robot[tr, i, R_VISITS]
+            trips += per_robot[tr, i, R_TRIPS]
+        totals[tr, T_VISITS] = visits
+        totals[tr, T_TRIPS] = trips

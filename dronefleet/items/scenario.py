@@ -1,0 +1,252 @@
+"""The item-delivery / foraging scenario behind the :mod:`dronefleet.scenarios` contract.
+
+Config files are TOML naming the scenario and grouping keys in five sections (run, world, generation, robots, options) (``configs/items.toml``
+spells out and documents every key)::
+
+    scenario = "items"
+    [run]
+    trials = 20
+    [world]
+    mode = "foraging"
+    [robots]
+    algorithm = "GR"
+
+:data:`SCHEMA` declares each key's section, unit, allowed values and meaning, :data:`DEFAULTS` its
+default (from :data:`dronefleet.items.params.KEYS`). Types are strict as for the other scenarios
+(``bool`` is not an ``int``, ``7.0`` is not an ``int``, an ``int`` is taken for a float); every
+value and rule is checked in :meth:`dronefleet.items.params.Params.validate`. ``--set key=value``
+takes ``section.key`` or the bare key; ``--seed`` sets ``run.seed``.
+
+A run holds all its trials; in a sweep its seed key is ``first_trial`` (blocks of ``trials``
+trials, as replenishment). Trial k of root seed s draws every stream from s * 2**32 + k, so the
+same trial index pairs runs across algorithms and (n, c, s) cells (section 10).
+
+Tables (:func:`simulate`): ``summary``, one row per trial (the columns of
+:func:`dronefleet.items.simulate.summary_columns`); ``robots``, one row per trial and robot
+(``trial``, ``robot``, ``trips``, ``visits``, ``items``). Both carry the config in their metadata.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
+from ..scenarios import Field
+from .params import KEYS, Params, allowed, check
+from .simulate import robot_columns, summary_columns
+
+if TYPE_CHECKING:
+    import pyarrow
+
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load",
+           "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
+           "simulate", "format_summary", "describe", "label"]
+
+NAME = "items"
+TABLES = ("summary", "robots")
+#: The study's figures come with its experiments (not yet).
+FIGURES: tuple[str, ...] = ()
+SEED_KEY = "first_trial"
+SEEDS_REQUIRED = False
+
+SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, allowed(name), key.doc) for name, key in KEYS.items()}
+DEFAULTS: dict = {name: key.default for name, key in KEYS.items()}
+SECTIONS: dict[str, tuple[str, ...]] = {}
+for _key, _field in SCHEMA.items():
+    SECTIONS[_field.section] = SECTIONS.get(_field.section, ()) + (_key,)
+del _key, _field
+
+
+def _to_dict(params: Params) -> dict:
+    return {SCENARIO_KEY: NAME, **{section: {key: getattr(params, key) for key in keys}
+                                   for section, keys in SECTIONS.items()}}
+
+
+class Config(Params):
+    """A validated configuration: :class:`Params` with the contract's JSON forms."""
+
+    def value(self, name: str) -> Any:
+        return getattr(self, name)
+
+    def to_dict(self) -> dict:
+        """``{"scenario": "items", section: {key: value}}``, as a config file writes it."""
+        return _to_dict(self)
+
+    def to_json(self) -> str:
+        """Deterministic JSON text of :meth:`to_dict` (sorted keys)."""
+        return json.dumps(self.to_dict(), sort_keys=True)
+
+
+def _build(values: Mapping[str, Any], origin: Mapping[str, str]) -> Config:
+    """Defaults updated by ``values`` -> Config, validated once; errors say where a value came from."""
+    try:
+        return Config(**{name: check(name, v) for name, v in values.items()}).validate()
+    except ConfigError as e:
+        sources = list(dict.fromkeys(origin[k] for k in e.keys if k in origin))
+        if not sources:
+            raise
+        raise ConfigError(f"{e} (set in {'; '.join(sources)})", e.keys) from None
+
+
+def _unknown_key(key: str, where: str = "") -> ConfigError:
+    return ConfigError(f"{where}unknown key {_show(key)}{_suggest(key.rpartition('.')[2], SCHEMA)}. "
+                       f"Allowed keys: {', '.join(f'{SCHEMA[k].section}.{k}' for k in SCHEMA)}")
+
+
+def resolve_key(key: str) -> str:
+    """'section.key' or a bare key -> the key name."""
+    section, dot, name = key.rpartition(".")
+    if name not in SCHEMA or (dot and section != SCHEMA[name].section):
+        raise _unknown_key(key)
+    return name
+
+
+def _flatten(document: Any, where: str | None = None, origin: dict | None = None) -> dict:
+    """``{scenario, section: {key: value}}`` -> flat ``{key: value}``, checking names."""
+    pre = f"{where}: " if where else ""
+    if not isinstance(document, dict):
+        raise ConfigError(f"{pre}expected a table of sections, got {type(document).__name__}")
+    flat = {}
+    for section, table in document.items():
+        if section == SCENARIO_KEY:
+            if table != NAME:
+                raise ConfigError(f"{pre}scenario = {_show(table)}, expected {NAME!r}")
+            continue
+        if section in SCHEMA:
+            raise ConfigError(f"{pre}key {section!r} is at the top level; put it in section "
+                              f"[{SCHEMA[section].section}]", [section])
+        if section not in SECTIONS:
+            raise ConfigError(f"{pre}unknown section [{_name(section)}]{_suggest(section, SECTIONS)}. "
+                              f"Allowed sections: {', '.join(SECTIONS)}")
+        if not isinstance(table, dict):
+            raise ConfigError(f"{pre}[{section}] must be a table of key = value, got {_show(table)}")
+        for key, v in table.items():
+            if key not in SECTIONS[section]:
+                if key in SCHEMA:
+                    raise ConfigError(f"{pre}{section}.{key} belongs in [{SCHEMA[key].section}]", [key])
+                raise _unknown_key(f"{section}.{key}", pre)
+            flat[key] = v
+            if origin is not None and where:
+                origin[key] = where
+    return flat
+
+
+def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), seed: int | None = None) -> Config:
+    """Read an items config: defaults < file < ``overrides`` (``"key=value"``, in order) < ``seed``.
+
+    Raises
+    ------
+    ConfigError
+        For any problem, before any work: the file (unreadable, not TOML, unknown section or
+        key), a malformed ``--set``, a wrong type, a value out of range, a combination the
+        model does not define or a run too large (:meth:`Params.validate`).
+    """
+    parsed = [(_parse_override(o, resolve_key), o) for o in overrides]
+    values, origin = dict(DEFAULTS), {}
+    if path is not None:
+        values.update(_flatten(read_toml(path)[1], str(path), origin))
+    for (name, v), text in parsed:
+        values[name] = v
+        origin[name] = f"--set {text}"
+    if seed is not None:
+        values["seed"] = seed
+        origin["seed"] = "--seed"
+    return _build(values, origin)
+
+
+def value(config: Config, name: str) -> Any:
+    return config.value(name)
+
+
+def replace(config: Config, changes: Mapping[str, Any]) -> Config:
+    """A validated copy of ``config`` with ``changes`` (``{key: value}``) applied, typed as in :func:`load`."""
+    for name in changes:
+        if name not in SCHEMA:
+            raise _unknown_key(str(name))
+    return _build({**{f.name: getattr(config, f.name) for f in fields(config)}, **changes}, {})
+
+
+def replicates(config: Config) -> range:
+    """The trials a run of ``config`` holds."""
+    return range(config.first_trial, config.first_trial + config.trials)
+
+
+def config_from_dict(document: Mapping[str, Any]) -> Config:
+    """:meth:`Config.to_dict`'s form (any subset of keys) -> Config."""
+    return _build({**DEFAULTS, **_flatten(document)}, {})
+
+
+def read_config(path: str | os.PathLike) -> Config:
+    """The config embedded in an items parquet file; DataError naming the file if it holds no valid config."""
+    from ..records import read_config as read
+
+    return read(path, config_from_dict)
+
+
+# ---------------------------------------------------------------- running
+
+_FLOATS = {"rate", "items_per_trip"}
+
+
+def table_schemas() -> dict[str, pyarrow.Schema]:
+    """Columns and types of the tables :func:`simulate` writes (int64 counts, float64 rates)."""
+    import pyarrow as pa
+
+    return {table: pa.schema([(name, pa.float64() if name in _FLOATS else pa.int64()) for name in names])
+            for table, names in (("summary", summary_columns()), ("robots", robot_columns()))}
+
+
+def simulate(config: Config) -> dict[str, pyarrow.Table]:
+    """Every trial of ``config`` in one kernel call -> ``{"summary", "robots"}`` pyarrow tables."""
+    from ..records import CONFIG_KEY, arrow_table
+    from .simulate import simulate as run
+
+    columns = run(config)
+    metadata = {CONFIG_KEY: config.to_json()}
+    return {name: arrow_table({c: columns[name][c] for c in schema.names}, metadata)
+            for name, schema in table_schemas().items()}
+
+
+def describe(config: Config) -> str:
+    """One line naming the configuration (the head of ``run``)."""
+    p = config
+    world = (f"{p.locations} random locations" if p.foraging
+             else f"{p.n_locations} grid locations (N_s {p.grid_spacing:g}, {p.grid_edge})")
+    return (f"{p.mode} ({p.truth}), {world}, {p.algorithm}: {p.n_robots} robots, capacity {p.capacity}, "
+            f"speed {p.speed:g}; trials {p.first_trial}-{p.first_trial + p.trials - 1} (seed {p.seed}) "
+            f"x {p.steps} steps")
+
+
+def label(config: Config) -> str:
+    """Short tag of the run's default folder."""
+    return f"{config.algorithm}-n{config.n_robots}-c{config.capacity}-trials{config.first_trial}-" \
+           f"{config.first_trial + config.trials - 1}"
+
+
+def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
+    """Mean, sd and min-max over the trials of each per-trial metric."""
+    from ..records import CONFIG_KEY
+
+    summary = tables["summary"]
+    config = config_from_dict(json.loads(summary.schema.metadata[CONFIG_KEY]))
+    served = ("foraged F [items]" if config.foraging else "served S [demands]")
+    rate = ("foraging rate F [items]" if config.truth == "logistic" else
+            "foraging rate [% of G]" if config.foraging else "serving rate [% of G]")
+    rows = (("generated G", "generated", ",.1f"), (served, "served", ",.1f"), (rate, "rate", ",.2f"),
+            ("visits", "visits", ",.1f"), ("trips", "trips", ",.1f"), ("items per trip", "items_per_trip", ".3f"))
+    lines = [f"  {'over ' + str(summary.num_rows) + ' trials':<26}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"]
+    for text, column, fmt in rows:
+        x = np.array(summary.column(column).to_pylist(), dtype=np.float64)
+        x = x[~np.isnan(x)]
+        if x.size == 0:
+            lines.append(f"  {text:<26}{'-':>11}")
+            continue
+        sd = f"{x.std(ddof=1):{fmt}}" if x.size > 1 else "-"
+        lines.append(f"  {text:<26}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}")
+    return "\n".join(lines)

@@ -20,12 +20,14 @@ REPLENISHMENT, PAPER = CONFIGS / "replenishment.toml", CONFIGS / "paper.toml"
 TINY = {
     "delivery": ("", ["horizon_weeks=0.02", "n_uavs=3"]),
     "replenishment": ('scenario = "replenishment"\n', ["trials=2", "ticks=300"]),
+    "items": ('scenario = "items"\n', ["trials=2", "steps=200"]),
 }
 # Columns each scenario's summary table must have.
 SUMMARY_COLUMNS = {
     "delivery": {"seed", "rule", "orders_arrived", "delivered", "lost_uavs"},
     "replenishment": {"trial", "seed", "work", "energy", "work_energy", "efficiency", "depleted_workers",
                       "depleted_chargers", "shared", "lost"},
+    "items": {"trial", "seed", "generated", "served", "rate", "trips", "visits", "items_per_trip"},
 }
 
 

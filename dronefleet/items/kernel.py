@@ -62,7 +62,7 @@ def poisson_parts(lam):
     return parts, mu, exp(-mu)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def poisson(rng, trial, stream, parts, mu, e_mu):
     """Poisson(parts * mu) by inversion of each part: one uniform per part, a fixed number
     per draw, so the stream stays aligned whatever the values; ``e_mu`` = exp(-mu)."""
@@ -101,7 +101,7 @@ def travel_table(pos, speed, out):
             out[b, a] = steps
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def predict(truth, rate, big_k, growth, observed, observed_at, tau):
     """D_hat_j(tau) from the model's (O_j, t_j) (section 5): linear for Bernoulli (p_hat) and
     Poisson (lam_hat), the closed-form logistic for logistic (A14, 0 if O_j = 0)."""
@@ -112,7 +112,7 @@ def predict(truth, rate, big_k, growth, observed, observed_at, tau):
     return observed + rate * (tau - observed_at)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def greater(u, w):
     """u > w by more than TIE_REL relative (A25): otherwise the two are equal."""
     return u > w and (u - w) > TIE_REL * max(abs(u), abs(w))
@@ -139,7 +139,25 @@ def astc_wait(big_k, growth, target, observed, observed_at, t, out_time):
 # ------------------------------------------------------------------ decisions (section 7)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
+def earmarks(node, dest, y, capacity, out):
+    """``out[b]`` = sum of c - y_r over the robots heading to location b (7.2, A27): in transit,
+    its destination; at a node, the node itself until it re-decides; robots at home never count.
+    ``out`` (M1,) is zero on entry; :func:`clear_earmarks` zeroes it again in O(n), not O(m)."""
+    for r in range(node.shape[0]):
+        b = dest[r] if node[r] < 0 else node[r]
+        if b > 0:
+            out[b] += capacity - y[r]
+
+
+@njit(cache=True, inline='always')
+def clear_earmarks(node, dest, out):
+    """Zero the entries :func:`earmarks` wrote."""
+    for r in range(node.shape[0]):
+        out[dest[r] if node[r] < 0 else node[r]] = 0.0
+
+
+@njit(cache=True, inline='always')
 def uniform_candidate(a, m, rng, stream):
     """A location 1..m other than ``a`` (0: home, every location is one), uniform; STAY if none."""
     count = m - 1 if a > 0 else m
@@ -151,13 +169,13 @@ def uniform_candidate(a, m, rng, stream):
     return b
 
 
-@njit(cache=True)
-def decide(i, t, a, opts, pars, travel, observed, observed_at, earmark, y, assigned, owner, leave_at, rng):
+@njit(cache=True, inline='always')
+def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, assigned, owner, leave_at, rng):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
 
-    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (M1,) the model row the robot
-    reads; ``earmark`` (M1,) sum of c - y_r over robots heading to each node (7.2, A27; the robot
-    itself counts only at its own node, never a candidate); ``y`` (n,) payloads; ``assigned`` (n,)
+    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model,
+    of which the robot reads ``row``; ``earmark`` (M1,) sum of c - y_r over robots heading to each node (:func:`earmarks`;
+    the robot itself counts only at its own node, never a candidate); ``y`` (n,) payloads; ``assigned`` (n,)
     AS/ASTC/SF locations (0: none); ``owner`` (M1,) the robot + 1 assigned to a location (0: none);
     ``leave_at`` (n,) SF's step to leave home; draws come from ``rng[0, STREAM_ROBOT + i]``.
     """
@@ -184,11 +202,11 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, earmark, y, assig
         if algorithm == ALG_SF:
             return own if t >= leave_at[i] else STAY
         out_time = travel[0, own]
-        if predict(truth, rate, big_k, growth, observed[own], observed_at[own], t + out_time) >= target:
+        if predict(truth, rate, big_k, growth, observed[row, own], observed_at[row, own], t + out_time) >= target:
             return own
         if algorithm == ALG_AS:
             return STAY
-        k = astc_wait(big_k, growth, target, observed[own], observed_at[own], t, out_time)
+        k = astc_wait(big_k, growth, target, observed[row, own], observed_at[row, own], t, out_time)
         count = 0
         for b in range(1, m + 1):
             if owner[b] == 0 and travel[0, b] + travel[b, 0] < k:
@@ -212,17 +230,17 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, earmark, y, assig
     else:
         baseline, fallback = yi / travel[a, 0], 0
     uncapped = algorithm == ALG_GRIC or algorithm == ALG_CAS
-    earmarks = algorithm != ALG_CAS
+    uses_earmarks = algorithm != ALG_CAS
     best, best_value, best_time, ties = STAY, 0.0, 0, 0
     for b in range(1, m + 1):
         if b == a:
             continue
         time = travel[a, b]
-        expected = predict(truth, rate, big_k, growth, observed[b], observed_at[b], t + time)
+        expected = predict(truth, rate, big_k, growth, observed[row, b], observed_at[row, b], t + time)
         if sweeper:
             value = expected / time if variant == CAS_RATE else expected
         else:
-            extra = max(0.0, expected - earmark[b]) if earmarks else max(0.0, expected)
+            extra = max(0.0, expected - earmark[b]) if uses_earmarks else max(0.0, expected)
             load = yi + extra
             if not uncapped:
                 load = max(capacity, load) if opts[O_GR_CAP_MAX] else min(capacity, load)
@@ -231,10 +249,10 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, earmark, y, assig
             continue                     # the baseline keeps ties
         if best == STAY or greater(value, best_value):
             best, best_value, best_time, ties = b, value, time, 1
-        elif not greater(best_value, value):
+        elif not greater(best_value, value) and not opts[O_TIES_LOWEST]:
             if time < best_time:
                 best, best_value, best_time, ties = b, value, time, 1
-            elif time == best_time and not opts[O_TIES_LOWEST]:
+            elif time == best_time:
                 ties += 1                # one-pass reservoir: each tied location kept w.p. 1/ties
                 if uniform(rng, 0, stream) * ties < 1.0:
                     best, best_value = b, value
@@ -291,6 +309,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     big_k, growth, noise = pars[P_K], pars[P_LG], pars[P_SE]
     m_min, x0 = pars[P_MMIN], pars[P_X0]
     target = 0.5 * big_k + capacity
+    earmarking = algorithm == ALG_GR or algorithm == ALG_GRIC
     uses_assignment = algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF
 
     rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
@@ -333,9 +352,9 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
         population[:] = x0
         observed[:, :] = x0 if truth == LOGISTIC else 0.0
         observed_at[:, :] = 0.0
-        earmark[:] = 0.0
         owner[:] = 0
         node[:] = 0
+        dest[:] = 0
         y[:] = 0
         assigned[:] = 0
         sleep[:] = 0
@@ -422,7 +441,6 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                         count[a] -= k
                         seen = count[a]
                     y[i] += k
-                    earmark[a] -= k
                     picked += k
                     if not foraging or opts[O_COUNT_PICKUP]:
                         served += k
@@ -430,14 +448,13 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                     observed[row, a] = seen
                     observed_at[row, a] = t
                 arrived[i] = False
-                b = decide(i, t, a, opts, pars, travel, observed[row], observed_at[row], earmark, y,
+                if earmarking:
+                    earmarks(node, dest, y, capacity, earmark)
+                b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
                            assigned, owner, leave_at, rng)
+                if earmarking:
+                    clear_earmarks(node, dest, earmark)
                 if b != STAY and b != a:
-                    on_board = capacity - y[i]
-                    if a > 0:
-                        earmark[a] -= on_board
-                    if b > 0:
-                        earmark[b] += on_board
                     node[i] = -1
                     dest[i] = b
                     left[i] = travel[a, b]

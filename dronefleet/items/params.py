@@ -66,7 +66,8 @@ KEYS: dict[str, Key] = {
                       "A10: a normal draw outside its range is clipped to it, or drawn again"),
     "lambda_g": Key("generation", "per step", float, 1e-6, 10.0, 0.04, "logistic growth rate"),
     "K": Key("generation", "resources", float, 1.0, 1e6, 100.0, "logistic carrying capacity"),
-    "x0": Key("generation", "resources", float, 0.0, 1e6, 50.0, "logistic initial population (and the robots' first O_j)"),
+    "x0": Key("generation", "resources", float, 0.0, 1e6, 50.0,
+              "logistic initial population (and the robots' first O_j)"),
     "sigma_e": Key("generation", "-", float, 0.0, 1.0, 0.08, "logistic noise (the robots assume 0)"),
     "m_min": Key("generation", "resources", int, 0, 1_000_000, 1, "resources always left at a logistic location (A12)"),
     # robots

@@ -1,7 +1,7 @@
 """The item-delivery / foraging scenario behind the :mod:`dronefleet.scenarios` contract.
 
-Config files are TOML naming the scenario and grouping keys in five sections (run, world, generation, robots, options) (``configs/items.toml``
-spells out and documents every key)::
+Config files are TOML naming the scenario and grouping keys in five sections (run, world,
+generation, robots, options; ``configs/items.toml`` spells out and documents every key)::
 
     scenario = "items"
     [run]

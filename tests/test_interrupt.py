@@ -114,6 +114,7 @@ def _leftovers(folder):
 @pytest.mark.parametrize("args", [
     pytest.param(["run", str(CONFIGS / "replenishment.toml"), "--set", "trials=2000"], id="replenishment"),
     pytest.param(["run", "--set", "horizon_weeks=90", "--set", "n_uavs=100"], id="delivery"),
+    pytest.param(["run", str(CONFIGS / "items.toml"), "--set", "trials=70000"], id="items"),
 ])
 def test_ctrl_c_in_a_compiled_kernel_is_a_clean_interruption(args, tmp_path):
     process = _start([*args, "--out", str(tmp_path / "out")], tmp_path)

@@ -56,7 +56,7 @@ def test_set_and_seed_reach_the_config_with_strict_types():
     ("speed=nan", ("robots.speed", "out of range")),
     ("speed=inf", ("robots.speed", "out of range")),
     ("grid_spacing=0.001", ("world.grid_spacing", "[0.02, 1]")),
-    ("obs_range=0.1", ("world.obs_range", "not simulated yet")),
+    ("obs_range=2", ("world.obs_range", "[0, 1.5]")),
     ("truth=gaussian", ("generation.truth", "'bernoulli', 'poisson', 'logistic'")),
     ("algorithm=gr", ("robots.algorithm", "'GR'")),
     ("cas_variant=fastest", ("options.cas_variant", "'max_expected', 'rate', 'gr_no_earmark'")),

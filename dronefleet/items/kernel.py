@@ -30,8 +30,8 @@ CAS_MAX_EXPECTED, CAS_RATE, CAS_GR_NO_EARMARK = 0, 1, 2
  O_COUNT_PICKUP, O_RESAMPLE, O_STEPS, O_CAPACITY, O_ROBOTS, O_DRAW_POSITIONS, O_DRAW_PARAMS) = range(15)
 N_OPTS = 15
 (P_SPEED, P_PV, P_KP, P_RATE, P_K, P_LG, P_SE, P_X0, P_MMIN,
- P_MEAN, P_SD, P_LOW, P_HIGH) = range(13)
-N_PARS = 13
+ P_MEAN, P_SD, P_LOW, P_HIGH, P_OBS_RANGE) = range(14)
+N_PARS = 14
 
 # Streams per trial: world (a), generation (b), then one per robot (c).
 STREAM_WORLD, STREAM_GENERATION, STREAM_ROBOT = 0, 1, 2
@@ -169,7 +169,7 @@ def uniform_candidate(a, m, rng, stream):
     return b
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def decide(i, t, a, opts, pars, travel, order, observed, observed_at, row, earmark, y, assigned, owner, leave_at,
            rng, value):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
@@ -273,7 +273,7 @@ def decide(i, t, a, opts, pars, travel, order, observed, observed_at, row, earma
     return best_of(a, order[a], value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def best_of(a, candidates, value, baseline, fallback, travel, lowest_index, rng, stream):
     """The location b != a among ``candidates`` of greatest ``value[b]`` (>= 0) if it beats
     ``baseline`` by more than TIE_REL (the baseline keeps ties), else ``fallback``. Values within
@@ -324,6 +324,34 @@ def candidate_order(travel, out):
 
 
 @njit(cache=True)
+def observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, obs_real, truth, count,
+                     population, observed, observed_at):
+    """A7 (o > 0): at the end of step t every robot observes every location within ``reach`` of
+    its position, the node it stands at or, in transit from a to b with l of t(a, b) steps left,
+    the point a + (t(a, b) - l) / t(a, b) (b - a) of its straight path."""
+    reach2 = reach * reach
+    for i in range(node.shape[0]):
+        if node[i] >= 0:
+            x, y = pos[node[i], 0], pos[node[i], 1]
+        else:
+            a, b = origin[i], dest[i]
+            done = (travel[a, b] - left[i]) / travel[a, b]
+            x = pos[a, 0] + done * (pos[b, 0] - pos[a, 0])
+            y = pos[a, 1] + done * (pos[b, 1] - pos[a, 1])
+        row = i if private else 0
+        for j in range(1, pos.shape[0]):
+            dx = pos[j, 0] - x
+            dy = pos[j, 1] - y
+            if dx * dx + dy * dy <= reach2:
+                if truth == LOGISTIC:
+                    observed[row, j] = population[j] if obs_real else np.floor(population[j])
+                else:
+                    observed[row, j] = count[j]
+                observed_at[row, j] = t
+
+
+
+@njit(cache=True)
 def draw_world(opts, pars, m, rng, pos, truth_par):
     """Stream (a) of a trial: FP positions (x then y per location, index order) if drawn, then
     the m normal deviates of the true parameters mean + sd z, clipped to [low, high] or redrawn
@@ -368,7 +396,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     foraging = mode == MODE_FP
     private = opts[O_PRIVATE] != 0
     big_k, growth, noise = pars[P_K], pars[P_LG], pars[P_SE]
-    m_min, x0 = pars[P_MMIN], pars[P_X0]
+    m_min, x0, reach = pars[P_MMIN], pars[P_X0], pars[P_OBS_RANGE]
     target = 0.5 * big_k + capacity
     earmarking = algorithm == ALG_GR or algorithm == ALG_GRIC
     uses_assignment = algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF
@@ -395,6 +423,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     owner = np.zeros(m1, dtype=np.int64)
     node = np.zeros(n, dtype=np.int64)
     dest = np.zeros(n, dtype=np.int64)
+    origin = np.zeros(n, dtype=np.int64)
     left = np.zeros(n, dtype=np.int64)
     y = np.zeros(n, dtype=np.int64)
     assigned = np.zeros(n, dtype=np.int64)
@@ -524,8 +553,12 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                     clear_earmarks(node, dest, earmark)
                 if b != STAY and b != a:
                     node[i] = -1
+                    origin[i] = a
                     dest[i] = b
                     left[i] = travel[a, b]
+            if reach > 0.0:
+                observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, opts[O_OBS_REAL], truth,
+                                 count, population, observed, observed_at)
             if tracing and tr == 0:
                 for i in range(n):
                     trace[t, i, TR_NODE] = node[i]

@@ -50,8 +50,9 @@ KEYS: dict[str, Key] = {
     "grid_spacing": Key("world", "length", float, 0.02, 1.0, 0.05, "IDP: N_s, spacing of the grid of locations"),
     "grid_edge": Key("world", "-", ("inclusive", "exclusive"), None, None, "inclusive",
                      "IDP grid {0, N_s, ..., N} with the upper edge (A3), or without it"),
-    "obs_range": Key("world", "length", float, 0.0, 0.0, 0.0,
-                     "o: robots observe only the location they stand at (A7; o > 0 not simulated yet)"),
+    "obs_range": Key("world", "length", float, 0.0, 1.5, 0.0,
+                     "o: robots observe the location they stand at (0) or, at the end of each step, "
+                     "every location within o of their position (A7)"),
     # truth
     "truth": Key("generation", "-", ("bernoulli", "poisson", "logistic"), None, None, "poisson",
                  "how resources or demands appear (section 4); logistic: FP only"),
@@ -209,8 +210,7 @@ def check(name: str, value: Any) -> Any:
     elif isinstance(value, int):
         value = float(value) if abs(value) < 2**1000 else math.inf
     if not (key.low <= value <= key.high):  # nan fails too
-        why = " (o > 0, A7, is not simulated yet)" if name == "obs_range" else ""
-        raise ParamsError(f"{where} = {_show(value)} is out of range: allowed {_allowed(key)}{why}", (name,))
+        raise ParamsError(f"{where} = {_show(value)} is out of range: allowed {_allowed(key)}", (name,))
     return value
 
 

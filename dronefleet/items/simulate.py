@@ -81,6 +81,7 @@ def kernel_inputs(params: Params, world: tuple[np.ndarray, np.ndarray] | None = 
     pars[k.P_SPEED], pars[k.P_PV], pars[k.P_KP], pars[k.P_RATE] = p.speed, p.p_v, p.K_p, assumed
     pars[k.P_K], pars[k.P_LG], pars[k.P_SE], pars[k.P_X0], pars[k.P_MMIN] = p.K, p.lambda_g, p.sigma_e, p.x0, p.m_min
     pars[k.P_MEAN], pars[k.P_SD], pars[k.P_LOW], pars[k.P_HIGH] = mean, sd, low, high
+    pars[k.P_OBS_RANGE] = p.obs_range
     if world is None:
         positions, truth_par = grid_positions(p), np.zeros(p.n_locations + 1)
     else:

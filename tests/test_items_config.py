@@ -123,3 +123,25 @@ def test_the_kernel_stops_at_once_when_its_stop_flag_is_set():
     k.run_trials(opts, pars, trial_seeds(p), positions, truth_par, totals, per_robot,
                  np.zeros((0, p.n_robots, 4), dtype=np.int64), np.zeros((0, len(positions))), np.ones(1, np.int8))
     assert (totals == -1).all()       # no trial ran
+
+
+def test_the_python_api_refuses_in_one_line_too():
+    import dronefleet
+
+    with pytest.raises(ConfigError, match=r"robots.n_robots = 0 is out of range"):
+        dronefleet.run(ITEMS, n_robots=0)
+
+
+def test_a_local_sweep_pairs_the_algorithms_trial_by_trial(tmp_path, capsys):
+    import pyarrow.parquet as pq
+
+    sweep = tmp_path / "s.toml"
+    sweep.write_text('[sweep]\nname = "items-pairs"\nscenario = "items"\n[set]\ntrials = 3\nsteps = 150\n'
+                     'truth = "bernoulli"\n[[grid]]\nalgorithm = ["R", "GR", "CAS"]\nn_robots = [1, 4]\n')
+    results = tmp_path / "res"
+    assert cli.main(["sweep", "run", str(sweep), "--results", str(results), "--jobs", "1"]) == 0
+    assert cli.main(["sweep", "collect", str(sweep), "--results", str(results)]) == 0
+    table = pq.read_table(results / "items-pairs" / "collected.parquet").to_pandas()
+    assert len(table) == 18
+    per_trial = table.groupby("trial")["generated"].nunique()
+    assert (per_trial == 1).all() and table.groupby("trial")["generated"].first().nunique() == 3

@@ -106,9 +106,7 @@ def decide(params, i, t, a, positions, observed, *, y=None, earmark=None, observ
     for s in range(k.STREAM_ROBOT + n):
         seed_stream(rng, 0, s, seed, s)
     as_array = lambda v, size, dtype: np.zeros(size, dtype) if v is None else np.asarray(v, dtype)  # noqa: E731
-    order = np.zeros((m1, m1 - 1), dtype=np.int32)
-    k.candidate_order(travel, order)
-    return k.decide(i, t, a, opts, pars, travel, order, np.asarray([observed], dtype=np.float64),
+    return k.decide(i, t, a, opts, pars, travel, np.asarray([observed], dtype=np.float64),
                     as_array(observed_at, (1, m1), np.float64).reshape(1, m1), 0,
                     as_array(earmark, m1, np.float64), as_array(y, n, np.int64), as_array(assigned, n, np.int64),
                     as_array(owner, m1, np.int64), as_array(leave_at, n, np.int64), rng, np.zeros(m1))

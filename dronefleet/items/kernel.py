@@ -170,17 +170,16 @@ def uniform_candidate(a, m, rng, stream):
 
 
 @njit(cache=True, inline='always')
-def decide(i, t, a, opts, pars, travel, order, observed, observed_at, row, earmark, y, assigned, owner, leave_at,
-           rng, value):
+def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, assigned, owner, leave_at, rng,
+           value):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
 
-    ``travel`` (M1, M1) travel times; ``order`` (M1, m) :func:`candidate_order`; ``observed``,
-    ``observed_at`` (rows, M1) the world model, of which the robot reads ``row``; ``earmark``
-    (M1,) sum of c - y_r over robots heading to each node (:func:`earmarks`; the robot itself
-    counts only at its own node, never a candidate); ``y`` (n,) payloads; ``assigned`` (n,)
-    AS/ASTC/SF locations (0: none); ``owner`` (M1,) the robot + 1 assigned to a location (0: none);
-    ``leave_at`` (n,) SF's step to leave home; draws come from ``rng[0, STREAM_ROBOT + i]``;
-    ``value`` (M1,) is scratch.
+    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model,
+    of which the robot reads ``row``; ``earmark`` (M1,) sum of c - y_r over robots heading to each
+    node (:func:`earmarks`; the robot itself counts only at its own node, never a candidate);
+    ``y`` (n,) payloads; ``assigned`` (n,) AS/ASTC/SF locations (0: none); ``owner`` (M1,) the
+    robot + 1 assigned to a location (0: none); ``leave_at`` (n,) SF's step to leave home; draws
+    come from ``rng[0, STREAM_ROBOT + i]``; ``value`` (M1,) is scratch.
     """
     algorithm = opts[O_ALG]
     capacity = opts[O_CAPACITY]
@@ -232,26 +231,8 @@ def decide(i, t, a, opts, pars, travel, order, observed, observed_at, row, earma
         baseline, fallback = 0.0, STAY
     else:
         baseline, fallback = yi / travel[a, 0], 0
-    if algorithm == ALG_GR and not opts[O_GR_CAP_MAX]:
-        # GR's value is at most c / (t(a, b) + t(b, 0)): scan the candidates by that round trip
-        # and stop where even a full load could neither beat nor tie the best so far
-        count = 0
-        top = -1.0
-        for idx in range(order.shape[1]):
-            b = order[a, idx]
-            if b == a:
-                continue
-            trip = travel[a, b] + travel[b, 0]
-            if capacity / trip < max(top, baseline) * (1.0 - 4.0 * TIE_REL):
-                break
-            expected = predict(truth, rate, big_k, growth, observed[row, b], observed_at[row, b], t + travel[a, b])
-            v = min(capacity, yi + max(0.0, expected - earmark[b])) / trip
-            value[b] = v
-            top = max(top, v)
-            count = idx + 1
-        return best_of(a, order[a, :count], value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
-    # Plain loops over every location (the first without branches: the compiler vectorises it):
-    # the expected count on arrival, then the value, then the best.
+    # Plain loops over every location, without branches (the compiler vectorises them): the
+    # expected count on arrival, then the value; then the best.
     for b in range(1, m + 1):
         value[b] = observed[row, b] + rate * (t + travel[a, b] - observed_at[row, b])
     if truth == LOGISTIC:
@@ -265,38 +246,42 @@ def decide(i, t, a, opts, pars, travel, order, observed, observed_at, row, earma
         ear = 1.0 if algorithm != ALG_CAS else 0.0      # CAS gr_no_earmark: GRIC without ear-marks
         for b in range(1, m + 1):
             value[b] = yi + max(0.0, value[b] - ear * earmark[b])
-        if algorithm == ALG_GR:          # gr_cap = "max" (A1)
-            for b in range(1, m + 1):
-                value[b] = max(capacity, value[b])
+        if algorithm == ALG_GR:
+            if opts[O_GR_CAP_MAX]:       # the text's max (A1)
+                for b in range(1, m + 1):
+                    value[b] = max(capacity, value[b])
+            else:
+                for b in range(1, m + 1):
+                    value[b] = min(capacity, value[b])
         for b in range(1, m + 1):
             value[b] = value[b] / (travel[a, b] + travel[b, 0])
-    return best_of(a, order[a], value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
+    return best_of(a, m, value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
 
 
 @njit(cache=True, inline='always')
-def best_of(a, candidates, value, baseline, fallback, travel, lowest_index, rng, stream):
-    """The location b != a among ``candidates`` of greatest ``value[b]`` (>= 0) if it beats
-    ``baseline`` by more than TIE_REL (the baseline keeps ties), else ``fallback``. Values within
-    TIE_REL of the greatest tie (A25): the shorter t(a, b) wins, then a uniform choice by
-    one-pass reservoir sampling in the order of ``candidates`` (one draw per tied location after
-    the first); or, with ``lowest_index``, the lowest index whatever the travel time."""
+def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
+    """The location b != a of greatest ``value[b]`` (>= 0) if it beats ``baseline`` by more than
+    TIE_REL (the baseline keeps ties), else ``fallback``. Values within TIE_REL of the greatest
+    tie (A25): the shorter t(a, b) wins, then a uniform choice by one-pass reservoir sampling in
+    index order (one draw per tied location after the first); or, with ``lowest_index``, the
+    lowest index whatever the travel time."""
     top = -1.0
-    for b in candidates:
+    for b in range(1, m + 1):
         if b != a and value[b] > top:
             top = value[b]
     if not greater(top, baseline):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top
     best, best_time, ties = STAY, 0, 0
-    for b in candidates:
+    for b in range(1, m + 1):
         v = value[b]
         if b == a or v < near or greater(top, v) or not greater(v, baseline):
             continue
         time = travel[a, b]
         if best == STAY:
             best, best_time, ties = b, time, 1
-        elif lowest_index:
-            best = min(best, b)
+            if lowest_index:
+                break
         elif time < best_time:
             best, best_time, ties = b, time, 1
         elif time == best_time:
@@ -304,20 +289,6 @@ def best_of(a, candidates, value, baseline, fallback, travel, lowest_index, rng,
             if uniform(rng, 0, stream) * ties < 1.0:
                 best = b
     return best
-
-
-@njit(cache=True)
-def candidate_order(travel, out):
-    """``out[a]`` (m,) = the locations 1..m by round trip t(a, b) + t(b, 0), then index: GR scans
-    them in this order (the order of best_of's reservoir draws too)."""
-    m1 = travel.shape[0]
-    keys = np.empty(m1 - 1, dtype=np.int64)
-    for a in range(m1):
-        for b in range(1, m1):
-            keys[b - 1] = (np.int64(travel[a, b]) + travel[b, 0]) * m1 + b
-        rank = np.argsort(keys)
-        for idx in range(m1 - 1):
-            out[a, idx] = rank[idx] + 1
 
 
 # ------------------------------------------------------------------ one trial
@@ -405,10 +376,6 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     pos = grid_pos.copy()
     travel = np.empty((m1, m1), dtype=np.int32)
     travel_table(pos, pars[P_SPEED], travel)
-    ranks = algorithm == ALG_GR or algorithm == ALG_GRIC or algorithm == ALG_CAS
-    order = np.zeros((m1 if ranks else 0, m), dtype=np.int32)
-    if ranks:
-        candidate_order(travel, order)
     truth_par = given_par.copy()
     parts = np.ones(m1, dtype=np.int64)
     part_mean = np.zeros(m1)
@@ -440,8 +407,6 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
         draw_world(opts, pars, m, rng, pos, truth_par)
         if opts[O_DRAW_POSITIONS]:
             travel_table(pos, pars[P_SPEED], travel)
-            if ranks:
-                candidate_order(travel, order)
         if truth == POISSON:
             for j in range(1, m1):
                 parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
@@ -547,7 +512,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                 arrived[i] = False
                 if earmarking:
                     earmarks(node, dest, y, capacity, earmark)
-                b = decide(i, t, a, opts, pars, travel, order, observed, observed_at, row, earmark, y,
+                b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
                            assigned, owner, leave_at, rng, value)
                 if earmarking:
                     clear_earmarks(node, dest, earmark)

@@ -231,30 +231,29 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
         baseline, fallback = 0.0, STAY
     else:
         baseline, fallback = yi / travel[a, 0], 0
-    # Plain loops over every location, without branches (the compiler vectorises them): the
-    # expected count on arrival, then the value; then the best.
-    for b in range(1, m + 1):
-        value[b] = observed[row, b] + rate * (t + travel[a, b] - observed_at[row, b])
+    # One plain loop per rule over contiguous rows (the model's row, travel times from a, and from
+    # home, which by symmetry are those to home), without branches: the compiler vectorises it.
+    seen, seen_at, out, back = observed[row], observed_at[row], travel[a], travel[0]
     if truth == LOGISTIC:
         for b in range(1, m + 1):
-            value[b] = predict(truth, rate, big_k, growth, observed[row, b], observed_at[row, b], t + travel[a, b])
+            value[b] = predict(truth, rate, big_k, growth, seen[b], seen_at[b], t + out[b])
+    else:
+        for b in range(1, m + 1):
+            value[b] = seen[b] + rate * (t + out[b] - seen_at[b])
     if sweeper:
         if variant == CAS_RATE:
             for b in range(1, m + 1):
-                value[b] = value[b] / max(1, travel[a, b])     # b = a (0 steps) is never chosen
+                value[b] = value[b] / max(1, out[b])     # b = a (0 steps) is never chosen
+    elif algorithm == ALG_GR and not opts[O_GR_CAP_MAX]:
+        for b in range(1, m + 1):
+            value[b] = min(capacity, yi + max(0.0, value[b] - earmark[b])) / (out[b] + back[b])
+    elif algorithm == ALG_GR:                # the text's max (A1)
+        for b in range(1, m + 1):
+            value[b] = max(capacity, yi + max(0.0, value[b] - earmark[b])) / (out[b] + back[b])
     else:
         ear = 1.0 if algorithm != ALG_CAS else 0.0      # CAS gr_no_earmark: GRIC without ear-marks
         for b in range(1, m + 1):
-            value[b] = yi + max(0.0, value[b] - ear * earmark[b])
-        if algorithm == ALG_GR:
-            if opts[O_GR_CAP_MAX]:       # the text's max (A1)
-                for b in range(1, m + 1):
-                    value[b] = max(capacity, value[b])
-            else:
-                for b in range(1, m + 1):
-                    value[b] = min(capacity, value[b])
-        for b in range(1, m + 1):
-            value[b] = value[b] / (travel[a, b] + travel[b, 0])
+            value[b] = (yi + max(0.0, value[b] - ear * earmark[b])) / (out[b] + back[b])
     return best_of(a, m, value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
 
 
@@ -265,17 +264,28 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
     tie (A25): the shorter t(a, b) wins, then a uniform choice by one-pass reservoir sampling in
     index order (one draw per tied location after the first); or, with ``lowest_index``, the
     lowest index whatever the travel time."""
-    top = -1.0
-    for b in range(1, m + 1):
-        if b != a and value[b] > top:
-            top = value[b]
+    if a > 0:
+        value[a] = -1.0                  # below every value: never the best, never tied
+    # the greatest value, in four independent running maxima (exact: max is associative)
+    top0 = top1 = top2 = top3 = -1.0
+    b = 1
+    while b + 3 <= m:
+        top0 = max(top0, value[b])
+        top1 = max(top1, value[b + 1])
+        top2 = max(top2, value[b + 2])
+        top3 = max(top3, value[b + 3])
+        b += 4
+    while b <= m:
+        top0 = max(top0, value[b])
+        b += 1
+    top = max(max(top0, top1), max(top2, top3))
     if not greater(top, baseline):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top
     best, best_time, ties = STAY, 0, 0
     for b in range(1, m + 1):
         v = value[b]
-        if b == a or v < near or greater(top, v) or not greater(v, baseline):
+        if v < near or greater(top, v) or not greater(v, baseline):
             continue
         time = travel[a, b]
         if best == STAY:

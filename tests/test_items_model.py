@@ -99,7 +99,7 @@ def decide(params, i, t, a, positions, observed, *, y=None, earmark=None, observ
     """``kernel.decide`` for robot ``i`` at node ``a``, step ``t``, on the given world and model."""
     opts, pars, _, _ = kernel_inputs(params)
     m1 = len(positions)
-    travel = np.zeros((m1, m1), dtype=np.int32)
+    travel = np.zeros((m1, m1))
     k.travel_table(np.asarray(positions, dtype=np.float64), params.speed, travel)
     n = params.n_robots
     rng = np.zeros((1, k.STREAM_ROBOT + n, 4), dtype=np.uint64)
@@ -202,7 +202,7 @@ def test_with_an_observation_range_robots_see_locations_near_their_path():
     # home (0.5, 0.5), 1 at (0.9, 0.5), 2 at (0.7, 0.55) beside the path, 3 at (0.7, 0.9) far from it;
     # robot 0 left home for 1 (4 steps), 2 steps done: at (0.7, 0.5). Robot 1 stands at 3.
     pos = np.array([HOME, (0.9, 0.5), (0.7, 0.55), (0.7, 0.9)])
-    travel = np.zeros((4, 4), dtype=np.int32)
+    travel = np.zeros((4, 4))
     k.travel_table(pos, 0.1, travel)
     assert travel[0, 1] == 4
     node, origin, dest, left = (np.array(v) for v in ([-1, 3], [0, 0], [1, 3], [2, 0]))

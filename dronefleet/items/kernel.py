@@ -5,6 +5,10 @@ experiment): each trial seeds its own streams from its root seed, draws its worl
 t = 1..T in the order of the spec's section 8. State is a structure of plain arrays indexed by
 node (0 = home, 1..m = locations, row-major on the IDP grid) or robot (0..n-1).
 
+Compiled with ``error_model='numpy'``: a float division is then a plain IEEE division, not one
+guarded against a zero divisor (no kernel divides by zero), which lets the value loops vectorise;
+results are the same, IEEE division being exact-rounded either way.
+
 Only + - * / sqrt, floor/ceil and :mod:`dronefleet.fpmath` ``exp``/``log`` touch the trajectory;
 random numbers come from :mod:`dronefleet.rng` streams, so a run is bit-identical on any CPU.
 Streams per trial (spec section 10): ``STREAM_WORLD`` (a) positions then true parameters,
@@ -54,7 +58,7 @@ NEVER = np.int64(1) << np.int64(62)   # "k = infinity" (ASTC), a sleeping step t
 # ------------------------------------------------------------------ samplers and geometry
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def poisson_parts(lam):
     """(parts, mean of a part, exp(-mean)) of Poisson(lam) drawn as a sum of inversions."""
     parts = max(1, int(np.ceil(lam / POISSON_CHUNK)))
@@ -62,7 +66,7 @@ def poisson_parts(lam):
     return parts, mu, exp(-mu)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def poisson(rng, trial, stream, parts, mu, e_mu):
     """Poisson(parts * mu) by inversion of each part: one uniform per part, a fixed number
     per draw, so the stream stays aligned whatever the values; ``e_mu`` = exp(-mu)."""
@@ -80,7 +84,7 @@ def poisson(rng, trial, stream, parts, mu, e_mu):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def travel_time(ax, ay, bx, by, speed):
     """t(a, b) [steps] = max(1, ceil(D/s - 1e-9)) for distinct nodes (A6); 0 for the same node."""
     dx = ax - bx
@@ -89,9 +93,10 @@ def travel_time(ax, ay, bx, by, speed):
     return max(1, steps)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def travel_table(pos, speed, out):
-    """``out[a, b]`` = t(a, b) for nodes at ``pos`` (M1, 2); 0 on the diagonal."""
+    """``out[a, b]`` = t(a, b) [steps] for nodes at ``pos`` (M1, 2); 0 on the diagonal; ``out`` (M1, M1) is
+    float64 in the kernel (whole numbers, exact), so that the value loops vectorise."""
     m1 = pos.shape[0]
     for a in range(m1):
         out[a, a] = 0
@@ -101,7 +106,7 @@ def travel_table(pos, speed, out):
             out[b, a] = steps
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def predict(truth, rate, big_k, growth, observed, observed_at, tau):
     """D_hat_j(tau) from the model's (O_j, t_j) (section 5): linear for Bernoulli (p_hat) and
     Poisson (lam_hat), the closed-form logistic for logistic (A14, 0 if O_j = 0)."""
@@ -112,13 +117,13 @@ def predict(truth, rate, big_k, growth, observed, observed_at, tau):
     return observed + rate * (tau - observed_at)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def greater(u, w):
     """u > w by more than TIE_REL relative (A25): otherwise the two are equal."""
     return u > w and (u - w) > TIE_REL * max(abs(u), abs(w))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def astc_wait(big_k, growth, target, observed, observed_at, t, out_time):
     """ASTC's k: the smallest integer k >= 1 with D_hat_a(t + k + t(0, a)) >= target, from the
     closed form then checked against the prediction (7.6); NEVER if target >= K or O_a = 0."""
@@ -139,7 +144,7 @@ def astc_wait(big_k, growth, target, observed, observed_at, t, out_time):
 # ------------------------------------------------------------------ decisions (section 7)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def earmarks(node, dest, y, capacity, out):
     """``out[b]`` = sum of c - y_r over the robots heading to location b (7.2, A27): in transit,
     its destination; at a node, the node itself until it re-decides; robots at home never count.
@@ -150,14 +155,14 @@ def earmarks(node, dest, y, capacity, out):
             out[b] += capacity - y[r]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def clear_earmarks(node, dest, out):
     """Zero the entries :func:`earmarks` wrote."""
     for r in range(node.shape[0]):
         out[dest[r] if node[r] < 0 else node[r]] = 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def uniform_candidate(a, m, rng, stream):
     """A location 1..m other than ``a`` (0: home, every location is one), uniform; STAY if none."""
     count = m - 1 if a > 0 else m
@@ -169,7 +174,7 @@ def uniform_candidate(a, m, rng, stream):
     return b
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, assigned, owner, leave_at, rng,
            value):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
@@ -257,13 +262,14 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
     return best_of(a, m, value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
     """The location b != a of greatest ``value[b]`` (>= 0) if it beats ``baseline`` by more than
     TIE_REL (the baseline keeps ties), else ``fallback``. Values within TIE_REL of the greatest
-    tie (A25): the shorter t(a, b) wins, then a uniform choice by one-pass reservoir sampling in
-    index order (one draw per tied location after the first); or, with ``lowest_index``, the
-    lowest index whatever the travel time."""
+    tie (A25): the shorter t(a, b) wins, then a uniform choice among the tied at that time, by
+    one draw (floor(u * ties), in index order) once they are counted; or, with
+    ``lowest_index``, the lowest index whatever the travel time. ``value`` is scratch: the
+    robot's own node is overwritten."""
     if a > 0:
         value[a] = -1.0                  # below every value: never the best, never tied
     # the greatest value, in four independent running maxima (exact: max is associative)
@@ -304,7 +310,7 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
 # ------------------------------------------------------------------ one trial
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, obs_real, truth, count,
                      population, observed, observed_at):
     """A7 (o > 0): at the end of step t every robot observes every location within ``reach`` of
@@ -332,7 +338,7 @@ def observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, o
 
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def draw_world(opts, pars, m, rng, pos, truth_par):
     """Stream (a) of a trial: FP positions (x then y per location, index order) if drawn, then
     the m normal deviates of the true parameters mean + sd z, clipped to [low, high] or redrawn
@@ -359,7 +365,7 @@ def draw_world(opts, pars, m, rng, pos, truth_par):
         truth_par[j] = min(max(value, low), high)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model='numpy', nogil=True)
 def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace, trace_counts, stop):
     """Every trial of one configuration; results written into ``totals`` (trials, N_TOTALS) and
     ``per_robot`` (trials, n, N_PER_ROBOT), int64.
@@ -384,7 +390,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
 
     rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
     pos = grid_pos.copy()
-    travel = np.empty((m1, m1), dtype=np.int32)
+    travel = np.empty((m1, m1))     # float64: the value loops convert no integer
     travel_table(pos, pars[P_SPEED], travel)
     truth_par = given_par.copy()
     parts = np.ones(m1, dtype=np.int64)
@@ -530,7 +536,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                     node[i] = -1
                     origin[i] = a
                     dest[i] = b
-                    left[i] = travel[a, b]
+                    left[i] = int(travel[a, b])
             if reach > 0.0:
                 observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, opts[O_OBS_REAL], truth,
                                  count, population, observed, observed_at)

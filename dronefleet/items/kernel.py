@@ -21,7 +21,7 @@ import numpy as np
 
 from ..fpmath import exp, log
 from ..jit import njit
-from ..rng import normal_pair, seed_stream, uniform
+from ..rng import lane_u64, normal_pair, seed_stream, uniform, unit
 
 # Modes, truths, algorithms, CAS variants (the ints the Python layer passes in ``opts``).
 MODE_FP, MODE_IDP = 0, 1
@@ -39,6 +39,9 @@ N_PARS = 14
 
 # Streams per trial: world (a), generation (b), then one per robot (c).
 STREAM_WORLD, STREAM_GENERATION, STREAM_ROBOT = 0, 1, 2
+# Key of location j's Bernoulli/Poisson generation stream: LOCATION_KEY + j (beyond every robot's key).
+LOCATION_KEY = 1 << 32
+UNIT_BITS = 9007199254740992.0   # 2**53: a uniform is k / 2**53, k the top 53 bits of a draw
 
 # Per-trial outputs (columns of ``totals``) and per-robot ones (last axis of ``per_robot``).
 T_GENERATED, T_SERVED, T_VISITS, T_TRIPS, T_PICKED = range(5)
@@ -51,6 +54,7 @@ TR_NODE, TR_DEST, TR_LEFT, TR_Y = range(4)
 STAY = -1
 TIE_REL = 1e-12            # A25: values within 1e-12 relative are equal
 TRAVEL_GUARD = 1e-9        # A6: ceil(D/s - 1e-9), float noise never adds a step
+POISSON_LEVELS = 4         # Poisson counts below 4 read from thresholds, in a loop that vectorises
 POISSON_CHUNK = 16.0       # Poisson(lambda) as a sum of ceil(lambda/16) inversions (exp(-16) >> underflow)
 NEVER = np.int64(1) << np.int64(62)   # "k = infinity" (ASTC), a sleeping step that never comes
 
@@ -67,12 +71,14 @@ def poisson_parts(lam):
 
 
 @njit(cache=True, error_model='numpy', inline='always')
-def poisson(rng, trial, stream, parts, mu, e_mu):
-    """Poisson(parts * mu) by inversion of each part: one uniform per part, a fixed number
-    per draw, so the stream stays aligned whatever the values; ``e_mu`` = exp(-mu)."""
+def poisson(u, lanes, j, parts, mu, e_mu):
+    """Poisson(parts * mu) by inversion of each part (k = 0, p = exp(-mu), F = p; while u > F:
+    k += 1, p *= mu / k, F += p): the first part from the uniform ``u``, the others from
+    stream ``j`` of ``lanes`` (4, streams); ``e_mu`` = exp(-mu)."""
     total = 0
-    for _ in range(parts):
-        u = uniform(rng, trial, stream)
+    for part in range(parts):
+        if part > 0:
+            u = unit(lane_u64(lanes, j))
         k = 0
         p = e_mu
         cdf = p
@@ -82,6 +88,23 @@ def poisson(rng, trial, stream, parts, mu, e_mu):
             cdf += p
         total += k
     return total
+
+
+@njit(cache=True, error_model='numpy')
+def poisson_levels(parts, mu, e_mu, out):
+    """``out[i]`` = floor(F_i 2**53) for i < POISSON_LEVELS, F_i the inversion's running sum
+    (:func:`poisson`, the same operations): a uniform k / 2**53 gives at least i + 1 arrivals
+    exactly when k > out[i]. -1 (every k exceeds it) when the inversion takes several parts."""
+    p = e_mu
+    cdf = p
+    for i in range(POISSON_LEVELS):
+        if i > 0:
+            if p <= 0.0:             # the inversion stops where p underflows: no level beyond
+                out[i] = NEVER
+                continue
+            p = p * mu / i
+            cdf += p
+        out[i] = int(np.floor(cdf * UNIT_BITS)) if parts == 1 else -1
 
 
 @njit(cache=True, error_model='numpy')
@@ -139,6 +162,45 @@ def astc_wait(big_k, growth, target, observed, observed_at, t, out_time):
     while k > 1 and predict(LOGISTIC, 0.0, big_k, growth, observed, observed_at, t + k - 1 + out_time) >= target:
         k -= 1
     return k
+
+
+@njit(cache=True, error_model='numpy')
+def bernoulli_step(lanes, below, count):
+    """One step of Bernoulli generation at every location j >= 1 from its stream ``lanes[:, j]``:
+    an item when the draw's top 53 bits are below ``below[j]`` = ceil(p_j 2**53), i.e. u < p_j.
+    Adds to ``count`` (M1,) and returns the items generated. Not inlined: alone, the loop vectorises."""
+    generated = 0
+    for j in range(1, count.shape[0]):
+        item = np.int64(np.int64(lane_u64(lanes, j) >> np.uint64(11)) < below[j])
+        count[j] += item
+        generated += item
+    return generated
+
+
+@njit(cache=True, error_model='numpy')
+def poisson_step(lanes, levels, count, draws, parts, part_mean, part_exp):
+    """One step of Poisson generation at every location j >= 1 from its stream ``lanes[:, j]``: the
+    inversion's count read from the thresholds ``levels`` (POISSON_LEVELS, M1) of
+    :func:`poisson_levels`, and where the draw exceeds the last one (rarely), the inversion itself
+    (:func:`poisson`). ``draws`` (M1,) is scratch. Adds to ``count`` and returns the arrivals.
+    Not inlined: alone, the loop vectorises."""
+    level0, level1, level2, level3 = levels[0], levels[1], levels[2], levels[3]
+    generated = 0
+    tail = False
+    for j in range(1, count.shape[0]):
+        k = np.int64(lane_u64(lanes, j) >> np.uint64(11))
+        arrivals = np.int64(k > level0[j]) + np.int64(k > level1[j]) + np.int64(k > level2[j]) + np.int64(k > level3[j])
+        count[j] += arrivals
+        generated += arrivals
+        tail |= k > level3[j]
+        draws[j] = k
+    if tail:
+        for j in range(1, count.shape[0]):
+            if draws[j] > level3[j]:         # the inversion's count replaces the levels'
+                arrivals = poisson(draws[j] / UNIT_BITS, lanes, j, parts[j], part_mean[j], part_exp[j]) - POISSON_LEVELS
+                count[j] += arrivals
+                generated += arrivals
+    return generated
 
 
 # ------------------------------------------------------------------ decisions (section 7)
@@ -393,6 +455,13 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     travel = np.empty((m1, m1))     # float64: the value loops convert no integer
     travel_table(pos, pars[P_SPEED], travel)
     truth_par = given_par.copy()
+    lanes = np.zeros((4, m1), dtype=np.uint64)     # location j's generation stream in column j
+    # A draw's top 53 bits k give the uniform u = k / 2**53. Bernoulli: an item at j when
+    # k < ceil(p_j 2**53), i.e. u < p_j. Poisson: the inversion gives the smallest i with
+    # u <= F_i, i.e. k <= floor(F_i 2**53), so for i < POISSON_LEVELS the count is the number of
+    # levels whose threshold k exceeds; above the last one the inversion runs (rarely).
+    threshold = np.zeros((POISSON_LEVELS, m1), dtype=np.int64)
+    draws = np.zeros(m1, dtype=np.int64)
     parts = np.ones(m1, dtype=np.int64)
     part_mean = np.zeros(m1)
     part_exp = np.ones(m1)
@@ -423,9 +492,16 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
         draw_world(opts, pars, m, rng, pos, truth_par)
         if opts[O_DRAW_POSITIONS]:
             travel_table(pos, pars[P_SPEED], travel)
-        if truth == POISSON:
+        if truth != LOGISTIC:
             for j in range(1, m1):
-                parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
+                seed_stream(rng, 0, STREAM_GENERATION, seeds[tr], LOCATION_KEY + j)   # (unused: scratch)
+                for w in range(4):
+                    lanes[w, j] = rng[0, STREAM_GENERATION, w]
+                if truth == BERNOULLI:
+                    threshold[0, j] = int(np.ceil(truth_par[j] * UNIT_BITS))
+                else:
+                    parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
+                    poisson_levels(parts[j], part_mean[j], part_exp[j], threshold[:, j])
         count[:] = 0
         population[:] = x0
         observed[:, :] = x0 if truth == LOGISTIC else 0.0
@@ -461,17 +537,14 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
             if stop[0] != 0:
                 break
             if t > 0:
-                # 1. generation, every location in index order
-                for j in range(1, m1):
-                    if truth == BERNOULLI:
-                        if uniform(rng, 0, STREAM_GENERATION) < truth_par[j]:
-                            count[j] += 1
-                            generated += 1
-                    elif truth == POISSON:
-                        arrivals = poisson(rng, 0, STREAM_GENERATION, parts[j], part_mean[j], part_exp[j])
-                        count[j] += arrivals
-                        generated += arrivals
-                    else:
+                # 1. generation, every location; Bernoulli and Poisson from each location's own
+                # stream, in loops that vectorise (the inversion only where an arrival is due)
+                if truth == BERNOULLI:
+                    generated += bernoulli_step(lanes, threshold[0], count)
+                elif truth == POISSON:
+                    generated += poisson_step(lanes, threshold, count, draws, parts, part_mean, part_exp)
+                else:
+                    for j in range(1, m1):
                         if have:
                             z, have = spare, False
                         else:

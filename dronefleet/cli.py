@@ -1,7 +1,7 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
 [--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
 ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig09..fig12|fig16..fig20|all [--quick]``;
-``dronefleet replay RUN_DIR [--out FILE.html]``.
+``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``.
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery.
 ``-q`` prints warnings and errors only, ``-v`` adds debugging detail (before or after the command)."""
 
@@ -170,12 +170,12 @@ def _write_replay(args, out):
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """``dronefleet replay RUN_DIR [--out FILE.html]``: the run's replay page (:mod:`dronefleet.replay`)."""
+    """``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``: the run's replay page (:mod:`dronefleet.replay`)."""
     from . import replay
     from .records import REPLAY_FILE
 
     out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
-    written = replay.write(args.run_dir, out)
+    written = replay.write(args.run_dir, out, args.trial)
     log.info(f"dronefleet replay: {written} ({written.stat().st_size / 1e6:.1f} MB)")
     return 0
 
@@ -187,6 +187,8 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
         if value:
             raise ConfigError(f"{flag} applies to delivery runs only, not to scenario {scenario.name!r}")
     config = scenario.load(args.config, args.set, args.seed)
+    if args.replay:
+        scenario.check_replayable(config)
     name = Path(args.config).stem
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config, scenario.label(config))
     check_outputs(out, None, args.overwrite, scenario.tables)
@@ -302,9 +304,11 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     p.set_defaults(func=run)
     p = commands.add_parser("replay", help="write a run's replay page: one self-contained HTML file",
                             description="A page that plays a run folder in any browser, offline: delivery "
-                                        "flights, or the first trial's robots of a replenishment run.")
+                                        "flights, or one trial's robots of a replenishment or items run.")
     p.add_argument("run_dir", metavar="RUN_DIR", help="a run folder that dronefleet run wrote")
     p.add_argument("--out", metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
+    p.add_argument("--trial", type=_at_least(1), metavar="K",
+                   help="the trial to play, of a run holding several (default: its first)")
     p.set_defaults(func=replay_command)
     p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
                             description="Work and efficiency bounds of docs/replenishment-model.md section 9, both "

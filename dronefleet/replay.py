@@ -19,11 +19,11 @@ from typing import Any
 
 from . import scenarios
 from .config import SCENARIO_KEY, ConfigError
-from .datafiles import DataError, parquet_schema
+from .datafiles import DataError, parquet_schema, read_parquet
 from .outputs import check_output_file, writing
 from .records import CONFIG_KEY, REPLAY_FILE, read_config_dict, run_dir_state, write_atomic
 
-__all__ = ["scenario_of_run", "page", "write"]
+__all__ = ["scenario_of_run", "chosen_trial", "page", "write"]
 
 TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
 
@@ -60,6 +60,23 @@ def scenario_of_run(run_dir: str | os.PathLike) -> scenarios.Scenario:
     return scenario
 
 
+def chosen_trial(run_dir: Path, trials: range, trial: int | None) -> int:
+    """``trial`` (None: the first of ``trials``, the trials its config says the run in ``run_dir``
+    holds); ConfigError (one line) if the config does not hold it or the run's ``summary.parquet``
+    has no row of it (a table whose rows are not its config's)."""
+    import pyarrow as pa
+
+    chosen = trials.start if trial is None else trial
+    if chosen not in trials:
+        raise ConfigError(f"--trial {chosen}: RUN_DIR {str(run_dir)!r} holds trials {trials.start} to "
+                          f"{trials.stop - 1}")
+    summary = run_dir / "summary.parquet"
+    if chosen not in read_parquet(summary, {"trial": pa.int64()}).column("trial").to_pylist():
+        raise DataError(f"table {str(summary)!r} has no row of trial {chosen}, one of the trials "
+                        f"{trials.start} to {trials.stop - 1} its config says the run holds")
+    return chosen
+
+
 def _json_ready(value):
     """``value`` with NaN and infinities as null: JSON has no such numbers."""
     if isinstance(value, float) and not math.isfinite(value):
@@ -87,10 +104,12 @@ def page(data: dict[str, Any], scene_script: str) -> str:
     return re.sub(r"/\*(?:DATA|SCENE)\*/", lambda match: parts.pop(match[0], match[0]), template)
 
 
-def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
-    """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
+def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None = None) -> Path:
+    """Write the replay page of the run in ``run_dir`` (of its trial ``trial`` if its runs hold
+    several; None: the first) to ``out`` (atomically); return ``out``.
 
-    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
+    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder, does not hold
+    ``trial``, would make a page too large, or holds a
     table that is another run's, cannot be read or holds a value the page cannot draw (a
     DataError naming the file and column), or if ``out`` cannot be written (a folder, a special
     file such as a named pipe or a device, a missing or read-only parent, a file in a run folder
@@ -111,6 +130,6 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
     # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it
-    html = page(scenario.replay_data(run_dir), scenario.replay_script)
+    html = page(scenario.replay_data(run_dir, trial), scenario.replay_script)
     with writing(out):
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))

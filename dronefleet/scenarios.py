@@ -51,11 +51,16 @@ The contract: a scenario is a module defining
 ``replicates(config) -> range`` (optional)
     the replicates (trials) a run holds, if a run holds several: a sweep refuses seeds whose
     runs would hold a replicate twice. Without it, a run is the one replicate its seed names.
-``replay_data(run_dir) -> dict`` (optional)
+``replay_data(run_dir[, trial]) -> dict`` (optional)
     what the replay page (:mod:`dronefleet.replay`) shows of the complete run folder
     ``run_dir`` (a :class:`pathlib.Path`), JSON-ready (``title`` and ``duration_s`` [s] at
     least); the script ``replay.js`` beside the module draws it (it defines
-    ``makeScene(data)``, see ``dronefleet/replay.html``).
+    ``makeScene(data)``, see ``dronefleet/replay.html``). A scenario with ``replicates``
+    takes ``trial`` too (``replay --trial K``; None: the run's first), ConfigError if the run
+    does not hold it.
+``check_replayable(config)`` (optional)
+    ConfigError (one line) if the page of a run of ``config`` would be refused:
+    ``run --replay`` calls it before the run.
 ``outdated(config, summary) -> bool`` (optional)
     True if a done run (its ``summary`` file at the path ``summary``) must run again because
     an input it read besides its config changed since (delivery: a saved fleet written again).
@@ -179,13 +184,29 @@ class Scenario:
     def format_bounds(self) -> Callable | None:
         return getattr(self.module, "format_bounds", None)
 
-    def replay_data(self, run_dir: Path) -> dict[str, Any]:
-        """The replay page's data of the run folder ``run_dir``; ConfigError if the scenario has no replay."""
+    def _replay_data(self) -> Callable[..., dict[str, Any]]:
         replay_data = getattr(self.module, "replay_data", None)
         if replay_data is None:
             having = [s.name for s in SCENARIOS.values() if hasattr(s.module, "replay_data")]
             raise ConfigError(f"scenario {self.name!r} has no replay page; scenarios with one: {', '.join(having)}")
-        return replay_data(run_dir)
+        return replay_data
+
+    def replay_data(self, run_dir: Path, trial: int | None = None) -> dict[str, Any]:
+        """The replay page's data of the run folder ``run_dir`` (of its trial ``trial``; None: its
+        first); ConfigError if the scenario has no replay or its runs no trials to choose."""
+        replay_data = self._replay_data()
+        if trial is None:
+            return replay_data(run_dir)
+        if not hasattr(self.module, "replicates"):
+            raise ConfigError(f"--trial {trial}: a {self.name} run is one replicate, it has no trials to choose")
+        return replay_data(run_dir, trial)
+
+    def check_replayable(self, config: Any) -> None:
+        """ConfigError (one line) if the replay page of a run of ``config`` would be refused."""
+        self._replay_data()
+        check = getattr(self.module, "check_replayable", None)
+        if check is not None:
+            check(config)
 
     @property
     def replay_script(self) -> str:

@@ -401,8 +401,8 @@ def format_bounds(config: Config) -> str:
                      f"    {row[0]:<12}{row[1]:>10} {row[2]:<7} {row[3]}" for row in rows)
 
 
-def replay_data(run_dir: Path) -> dict[str, Any]:
+def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
     """The replay page's data of a run folder: :func:`dronefleet.replenishment.replay.replay_data`."""
     from .replay import replay_data as data
 
-    return data(run_dir)
+    return data(run_dir, trial)

@@ -32,6 +32,7 @@ import json
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import fields
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -46,7 +47,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
-           "simulate", "format_summary", "describe", "label"]
+           "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable"]
 
 NAME = "items"
 TABLES = ("summary", "robots")
@@ -250,3 +251,17 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         sd = f"{x.std(ddof=1):{fmt}}" if x.size > 1 else "-"
         lines.append(f"  {text:<26}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}")
     return "\n".join(lines)
+
+
+def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
+    """The replay page's data of a run folder: :func:`dronefleet.items.replay.replay_data`."""
+    from .replay import replay_data as data
+
+    return data(run_dir, trial)
+
+
+def check_replayable(config: Config) -> None:
+    """Refuse ``run --replay`` of a run whose page would be too large (:mod:`dronefleet.items.replay`)."""
+    from .replay import check_replayable as check
+
+    check(config)

@@ -70,6 +70,18 @@ def test_the_page_holds_each_trial_of_the_run(name, runs):
         assert max(data["payload"]) <= config.capacity and data["x"][:n] == [0.5] * n
 
 
+@pytest.mark.parametrize("changes", [["count_at=pickup"], ["mode=delivery", "grid_spacing=0.25"],
+                                     ["algorithm=R", "truth=bernoulli"], ["sharing=destinations", "obs_range=0.3"]])
+def test_the_series_end_at_the_summarys_totals_whatever_the_options(changes, tmp_path):
+    (tmp_path / "items.toml").write_text('scenario = "items"\n[run]\ntrials = 1\nsteps = 120\n')
+    run = tmp_path / "run"
+    assert cli.main(["run", str(tmp_path / "items.toml"), "--out", str(run),
+                     *[arg for change in changes for arg in ("--set", change)]]) == 0
+    data, summary = replay_data(run), summary_of(run).loc[1]
+    assert data["served"][-1] == summary["served"] > 0 and data["generated"][-1] == summary["generated"]
+    assert all(a <= b for a, b in zip(data["served"], data["served"][1:]))
+
+
 @pytest.mark.parametrize("name", RUNS)
 def test_the_world_is_the_trials(name, runs):
     # the trial run again on the page's world (stream (a) not read) gives the summary's row

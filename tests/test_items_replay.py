@@ -196,6 +196,17 @@ def test_a_tampered_run_is_refused_in_one_line_before_any_simulation(change, fra
     assert not out.exists() and sorted(p.name for p in tampered.iterdir()) == ["robots.parquet", "summary.parquet"]
 
 
+@pytest.mark.parametrize("change", [lambda c: {**c, "robots": {**c["robots"], "algorithm": "R"}},
+                                    lambda c: {**c, "run": {**c["run"], "seed": 7}}])
+def test_a_config_that_does_not_give_the_summarys_trial_is_refused_in_one_line(change, runs, tmp_path, capsys):
+    tampered, out = _tamper(runs["foraging"], tmp_path, change), tmp_path / "page.html"
+    served = int(summary_of(tampered).loc[2, "served"])
+    _refused(capsys, ["replay", str(tampered), "--out", str(out)],
+             f"summary.parquet': trial 2 has generated {int(summary_of(tampered).loc[2, 'generated'])}, "
+             f"served {served}, but its config gives generated")
+    assert not out.exists()
+
+
 def test_run_replay_of_a_run_too_large_for_a_page_is_refused_before_the_run(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(items_replay, "MAX_VALUES", 100)
     (tmp_path / "items.toml").write_text(RUNS["foraging"])

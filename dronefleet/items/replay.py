@@ -88,6 +88,25 @@ def _paths(trace: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.nda
     return xy[:, :, 0], xy[:, :, 1]
 
 
+def _check_totals(summary: Path, trial: int, totals: np.ndarray) -> None:
+    """DataError (one line) unless the row of ``trial`` in ``summary`` holds the ``totals`` the
+    trial gives again (the kernel's per-trial columns): the page must be the run's trial, not
+    that of a config tampered with in every table, or of a version that drew other numbers."""
+    import pyarrow as pa
+
+    from ..datafiles import DataError, read_parquet
+    from . import kernel as k
+
+    columns = {"trial": pa.int64(), "generated": pa.int64(), "served": pa.int64()}
+    table = read_parquet(summary, columns).to_pandas()
+    row = table[table.trial == trial].iloc[0]
+    again = {"generated": int(totals[k.T_GENERATED]), "served": int(totals[k.T_SERVED])}
+    if any(row[name] != value for name, value in again.items()):
+        raise DataError(f"table {str(summary)!r}: trial {trial} has generated {row.generated}, served {row.served}, "
+                        f"but its config gives generated {again['generated']}, served {again['served']}: a table of "
+                        "another run or dronefleet version; write the run again with dronefleet run")
+
+
 def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
     """The page's data of the items run in ``run_dir``: trial ``trial`` (None: its first).
 
@@ -101,7 +120,8 @@ def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
     trial's; logistic: foraged and A19's net growth).
 
     ConfigError (one line, before the simulation) if ``trial`` is not one of the run's
-    trials or the page would hold more than :data:`MAX_VALUES` values.
+    trials or the page would hold more than :data:`MAX_VALUES` values; DataError (one line) if
+    the trial simulated again does not give the summary's generated and served.
     """
     from ..replay import chosen_trial
     from . import kernel as k
@@ -115,6 +135,7 @@ def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
         raise ConfigError(f"RUN_DIR {str(run_dir)!r}: {reason}")
     positions, truth_par = trial_world(config, trial)
     r = run_cell(config.replace(first_trial=trial, trials=1), world=(positions, truth_par), trace=True)
+    _check_totals(run_dir / "summary.parquet", trial, r["totals"][0])
     trace, counts = r["trace"], r["trace_counts"][:, 1:]
     payload = trace[:, :, k.TR_Y]
     # payloads grow only at locations (picked) and drop to 0 only at home (unloaded)

@@ -23,8 +23,8 @@ from ..config import ConfigError
 
 __all__ = ["replay_data", "check_replayable", "trial_world", "MAX_VALUES"]
 
-#: At most this many (steps + 1) x (robots + locations) values in a page (a page of ~10-20 MB,
-#: the trace ~100 MB while it is built); the paper's largest cell (1000 steps, 10 robots, 441
+#: At most this many (steps + 1) x (robots + locations) values in a page (~6 MB of page; the
+#: trace ~50 MB while it is built); the paper's largest cell (1000 steps, 10 robots, 441
 #: locations) has 4.5e5.
 MAX_VALUES = 2_000_000
 

@@ -26,7 +26,7 @@ from ..config import ConfigError
 
 if TYPE_CHECKING:
     from .config import Config
-    from .simulation import RunResult
+    from .result import RunResult
 
 #: Columns a fleet file must have.
 COLUMNS = ("t_s", "uav", "soh", "w_distance", "w_mass", "w_soc", "intercept", "steps", "soc", "lost", "period")

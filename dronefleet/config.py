@@ -29,8 +29,8 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Callable, Iterable, Mapping
 
-__all__ = ["ConfigError", "MAX_CONFIG_BYTES", "MAX_DEPTH", "SCENARIO_KEY", "check_depth", "read_toml", "shipped_config",
-           "too_deep"]
+__all__ = ["ConfigError", "SweepError", "MAX_CONFIG_BYTES", "MAX_DEPTH", "SCENARIO_KEY", "check_depth", "read_toml",
+           "shipped_config", "too_deep"]
 
 #: Largest config file read [bytes]; real ones are a few KB.
 MAX_CONFIG_BYTES = 1_000_000
@@ -47,6 +47,14 @@ class ConfigError(ValueError):
     def __init__(self, message: str, keys: Iterable[str] = ()) -> None:
         super().__init__(message)
         self.keys = tuple(keys)
+
+
+class SweepError(ConfigError):
+    """A sweep file, task or results directory that cannot be used; the message says why.
+
+    Here, beside ConfigError, rather than in :mod:`dronefleet.sweeps`: the executors and the
+    scenarios' studies raise it too, and they sit below the sweeps (docs/scenario-contract.md).
+    """
 
 
 #: Deepest nesting of tables and lists in a config or sweep file, or in a value given by ``--set`` or

@@ -21,7 +21,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import TypeVar
 
-from .sweeps import SweepError
+from .config import SweepError
 
 #: ``prctl`` option: the signal the kernel sends this process when its parent dies (linux/prctl.h).
 _PR_SET_PDEATHSIG = 1

@@ -109,7 +109,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from . import console, scenarios
-from .config import SCENARIO_KEY, ConfigError, _show, check_depth, read_toml
+from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, read_toml
 from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
@@ -143,10 +143,6 @@ _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 _LABEL = r"[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?"   # of a host name: 1-63 characters
 _SCHEDULER = re.compile(rf"(?:(?:tcp|tls|ucx|ws|wss)://)?(?P<host>{_LABEL}(?:\.{_LABEL})*|\[[0-9A-Fa-f:.]+\])"
                         r":(?P<port>[0-9]{1,5})")
-
-
-class SweepError(ConfigError):
-    """A sweep file, task or results directory that cannot be used; the message says why."""
 
 
 @dataclass(frozen=True)

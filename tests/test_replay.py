@@ -21,7 +21,7 @@ from dronefleet.replenishment import Params, simulate
 from dronefleet.replenishment.kernel import BASE, TRANSFER, WORK, floor_colour
 from dronefleet.replenishment import replay as replay_module
 from dronefleet.replenishment.replay import AREAS
-from dronefleet.replenishment.replay import replay_data as replenishment_data
+from dronefleet.replenishment.scenario import replay_data as replenishment_data
 
 REPLENISHMENT = 'scenario = "replenishment"\n[run]\ntrials = 2\nfirst_trial = 3\nticks = 900\n'
 

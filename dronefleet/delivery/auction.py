@@ -57,11 +57,9 @@ without loading anything: a ``"module:function"`` path is kept as the name it is
 forecast is :func:`reservation_wait`; the engine runs the two phases.
 """
 
-import contextlib
 import functools
 import importlib
 import logging
-import threading
 from importlib.metadata import entry_points
 from typing import NamedTuple
 
@@ -76,6 +74,7 @@ from numba.core.registry import cpu_target
 
 from ..config import ConfigError, _suggest
 from ..fpmath import log
+from ..plugins import IMPORT_NOTICE_S, importing  # read at each import: tests shorten it
 
 logger = logging.getLogger(__name__)  # not ``log``: that is fpmath's logarithm here
 
@@ -88,8 +87,6 @@ PLUGIN = -2
 #: What the engine passes to a rule and expects back (see the module doc).
 RULE_ARGS = (types.float64, types.float64, types.float64, types.float64, typeof(np.random.default_rng(0)))
 RULE_SIGNATURE = types.Tuple((types.boolean, types.float64))(*RULE_ARGS)
-#: After how long a plugin module still importing is said to be [s] (it may hang: Ctrl-C stops it).
-IMPORT_NOTICE_S = 10.0
 
 
 @njit(cache=True)
@@ -244,7 +241,7 @@ def _plugin(name: str) -> Rule:
                             f"{', '.join(map(repr, names))}, or a plugin's 'package.module:function'")
         entry_point = next(iter(found))
         try:
-            with _importing(entry_point.module, name):
+            with importing(entry_point.module, f"winner rule {name!r}", IMPORT_NOTICE_S):
                 kernel = entry_point.load()
         except Exception as e:  # the plugin's own error, whatever it is: the user must see it
             raise RuleError(f"is an entry point of {ENTRY_POINT_GROUP} ({entry_point.value}) that fails to "
@@ -252,30 +249,11 @@ def _plugin(name: str) -> Rule:
     return _checked(kernel)
 
 
-@contextlib.contextmanager
-def _importing(module_name: str, rule: str):
-    """Around the import of a plugin's module: one that calls sys.exit is an ImportError, Ctrl-C
-    names the module (an import may hang), and an import still going after IMPORT_NOTICE_S is said."""
-    notice = threading.Timer(IMPORT_NOTICE_S, lambda: logger.warning(
-        f"dronefleet: still importing module {module_name!r} of winner rule {rule!r} after "
-        f"{IMPORT_NOTICE_S:g} s (Ctrl-C stops)"))
-    notice.daemon = True
-    notice.start()
-    try:
-        yield
-    except SystemExit as e:  # not an Exception: it would end the process, silently
-        raise ImportError(f"it calls sys.exit({e.code!r}) when imported") from None
-    except KeyboardInterrupt:
-        raise KeyboardInterrupt(f"while importing module {module_name!r} of winner rule {rule!r}") from None
-    finally:
-        notice.cancel()
-
-
 def _import_path(path: str):
     """The object at ``"package.module:attribute"``."""
     module_name, _, attribute = path.partition(":")
     try:
-        with _importing(module_name, path):
+        with importing(module_name, f"winner rule {path!r}", IMPORT_NOTICE_S):
             module = importlib.import_module(module_name)
     except Exception as e:  # ImportError, or whatever the module raises on import
         raise RuleError(f"names module {module_name!r}, which cannot be imported ({type(e).__name__}: {e}); "

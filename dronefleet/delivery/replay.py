@@ -18,7 +18,7 @@ import pyarrow as pa
 
 from ..config import ConfigError
 from ..datafiles import checked_column, parquet_rows, read_parquet
-from .config import SECONDS_PER_WEEK, Config
+from .config import SECONDS_PER_WEEK, Config, describe
 
 __all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS", "MAX_ORDERS", "MAX_SAMPLES"]
 
@@ -110,7 +110,6 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
     (``t_s``, ``orders``).
     """
     from .records import read_config
-    from .scenario import describe
 
     config = read_config(run_dir / "summary.parquet")
     flights = parquet_rows(run_dir / "attempts.parquet")

@@ -149,6 +149,64 @@ def test_a_config_selects_a_registered_scenario_never_a_module(tmp_path, monkeyp
     assert not (tmp_path / "results").exists()
 
 
+def test_reproduce_lists_every_study_and_its_figures(capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["reproduce", "--list"])
+    printed = capsys.readouterr().out.splitlines()
+    assert stop.value.code == 0
+    assert printed[0].startswith("delivery: ") and "D4.4" in printed[0]
+    assert printed[1].split() == ["fig16", "fig17", "fig18", "fig19", "fig20"]
+    assert printed[2].startswith("replenishment: ") and printed[3].split() == ["fig09", "fig10", "fig11", "fig12"]
+
+
+#: A study of the random walk: one figure, its table the robots of one run.
+STUDY = """
+
+class _Study:
+    TITLE = "random walks"
+    FIGURES = ({figures})
+    QUICK = "the same"
+    TABLE_COLUMNS = {{"robots": {{"robot": "count", "moved": "count"}}}}
+
+    def run_together(self, study, figures):
+        pass
+
+    def tidy(self, study, figure):
+        table = simulate(Config(**DEFAULTS))["robots"].to_pandas()
+        study.write_table(table, study.figure_dir(figure) / "robots.parquet")
+
+    def draw(self, study, figure):
+        return [study.figure_dir(figure) / f"{{len(study.read_table(figure, 'robots'))}}.txt"]
+
+    def check(self, study, figure):
+        return []
+
+
+def study():
+    return _Study()
+"""
+
+
+def test_an_installed_scenarios_study_is_listed_and_reproduced(tmp_path, monkeypatch, capsys):
+    name = next(NAMES)
+    install(tmp_path, name, f"{name}_module", f"{name}_module",
+            WALK.replace('NAME = "random_walk"', f'NAME = "{name}"') + STUDY.format(figures=f'"{name}-fig1",'))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(SystemExit):
+        cli.main(["reproduce", "--list"])
+    assert f"{name}: random walks\n  {name}-fig1\n" in capsys.readouterr().out
+    assert cli.main(["reproduce", f"{name}-fig1", "--out", str(tmp_path / "out")]) == 0
+    assert pq.read_table(tmp_path / "out" / f"{name}-fig1" / "robots.parquet").num_rows == 4
+
+
+def test_an_installed_study_naming_a_figure_of_another_is_refused(tmp_path, monkeypatch, capsys):
+    name = next(NAMES)
+    install(tmp_path, name, f"{name}_module", f"{name}_module",
+            WALK.replace('NAME = "random_walk"', f'NAME = "{name}"') + STUDY.format(figures='"fig16",'))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    refused(capsys, ["reproduce", "--list"], f"scenario '{name}' names its figure 'fig16', which 'delivery' has")
+
+
 @pytest.fixture(scope="module")
 def example_site(tmp_path_factory):
     """The example package installed as a user would, into a folder of its own (from a copy: the

@@ -109,7 +109,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from . import console, scenarios
-from .config import SCENARIO_KEY, ConfigError, _show, check_depth, read_toml
+from .config import SCENARIO_KEY, ConfigError, _show, check_depth, one_line, read_toml
 from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
@@ -533,7 +533,8 @@ def _report(message: str) -> None:
 
 
 def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
-    """Write ``_failed/<run id>.json`` (error, traceback, config) for ``run``; return ``error``.
+    """Write ``_failed/<run id>.json`` (error, traceback, config) for ``run``; return the error's
+    first line, as a terminal may show it.
 
     A record that cannot be written (``_failed`` unwritable, disk full) is reported on
     stderr, one line, and the sweep goes on: the run is not done either way, so ``status``
@@ -548,8 +549,13 @@ def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
         write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
     except OSError as problem:
         _report(f"cannot write the failure record {failure} of run {run.partition} "
-                f"({problem.strerror or problem}); its error: {error.splitlines()[0] if error else error}")
-    return error
+                f"({problem.strerror or problem}); its error: {_first_line(error)}")
+    return _first_line(error)
+
+
+def _first_line(error: str) -> str:
+    """The first line of a recorded error (a plugin's may hold many, or escape sequences), shown as text."""
+    return one_line((error.splitlines() or [""])[0])[:500]
 
 
 def _config_difference(scenario: Scenario, a, b) -> str:
@@ -1157,7 +1163,7 @@ def _recorded_error(path: Path) -> str:
     error = record.get("error") if isinstance(record, dict) else None
     if not isinstance(error, str):
         return f"(the record {path.name} cannot be read: it holds no \"error\" text)"
-    return (error.splitlines() or [""])[0][:500]
+    return _first_line(error)
 
 
 def status_command(args: argparse.Namespace) -> int:

@@ -74,7 +74,7 @@ from numba.core.dispatcher import Dispatcher
 from numba.core.errors import NumbaError
 from numba.core.registry import cpu_target
 
-from ..config import ConfigError, _suggest
+from ..config import ConfigError, _show, _suggest, brief
 from ..fpmath import log
 
 logger = logging.getLogger(__name__)  # not ``log``: that is fpmath's logarithm here
@@ -248,7 +248,7 @@ def _plugin(name: str) -> Rule:
                 kernel = entry_point.load()
         except Exception as e:  # the plugin's own error, whatever it is: the user must see it
             raise RuleError(f"is an entry point of {ENTRY_POINT_GROUP} ({entry_point.value}) that fails to "
-                            f"load: {type(e).__name__}: {e}") from None
+                            f"load: {type(e).__name__}: {brief(e)}") from None
     return _checked(kernel)
 
 
@@ -264,7 +264,7 @@ def _importing(module_name: str, rule: str):
     try:
         yield
     except SystemExit as e:  # not an Exception: it would end the process, silently
-        raise ImportError(f"it calls sys.exit({e.code!r}) when imported") from None
+        raise ImportError(f"it calls sys.exit({_show(e.code)})") from None
     except KeyboardInterrupt:
         raise KeyboardInterrupt(f"while importing module {module_name!r} of winner rule {rule!r}") from None
     finally:
@@ -278,15 +278,16 @@ def _import_path(path: str):
         with _importing(module_name, path):
             module = importlib.import_module(module_name)
     except Exception as e:  # ImportError, or whatever the module raises on import
-        raise RuleError(f"names module {module_name!r}, which cannot be imported ({type(e).__name__}: {e}); "
+        raise RuleError(f"names module {module_name!r}, which cannot be imported ({type(e).__name__}: {brief(e)}); "
                         "allowed: a built-in rule, an installed plugin or 'package.module:function'") from None
     try:
-        return functools.reduce(getattr, attribute.split("."), module)
+        with _importing(module_name, path):  # a module __getattr__ runs the plugin's code too
+            return functools.reduce(getattr, attribute.split("."), module)
     except AttributeError:
         raise RuleError(f"names {attribute!r}, which module {module_name!r} does not have") from None
     except Exception as e:  # a module __getattr__ or property of the plugin's that raises
         raise RuleError(f"names {attribute!r}, which module {module_name!r} fails to give "
-                        f"({type(e).__name__}: {e})") from None
+                        f"({type(e).__name__}: {brief(e)})") from None
 
 
 def _checked(kernel) -> Rule:

@@ -123,7 +123,8 @@ def test_check_refuses_a_delivery_runs_table_it_cannot_compare_before_any_run(ch
     ("ticks", 10**8, "robot-ticks"),  # each trial allowed, all of them together days of running
     ("work_ratio", -1.0, "work_ratio"),
     ("charge_rate", float("nan"), "column 'charge_rate' holds nan at row 0"),
-    ("trial", 0, "first_trial = 0 is out of range"),
+    ("trial", range, "first_trial = 0 is out of range"),  # trials 0, 1, 2, ...: consecutive, but from 0
+    ("trial", 1, "holds the trials [1, 1, 1,"),  # each row trial 1: re-running them would be one trial many times
     ("n_workers", -6, "n_workers"),
 ])
 def test_check_refuses_a_replenishment_configuration_it_cannot_re_run_before_any_run(column, value, fragment, tmp_path,
@@ -135,6 +136,7 @@ def test_check_refuses_a_replenishment_configuration_it_cannot_re_run_before_any
 
     def change(table):  # every row: the configurations --check picks hold the value too
         index = table.schema.get_field_index(column)
-        return table.set_column(index, column, pa.array([value] * table.num_rows, table.schema.field(column).type))
+        values = value(table.num_rows) if callable(value) else [value] * table.num_rows
+        return table.set_column(index, column, pa.array(values, table.schema.field(column).type))
     tamper(path, change)
     refused(["reproduce", "fig09", "--check", "--out", str(tmp_path)], capsys, str(path), fragment)

@@ -21,7 +21,7 @@ import pandas as pd
 from ..sweeps import SweepError, load_sweep
 from . import experiments
 from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
-from ..config import ConfigError
+from ..config import ConfigError, _show
 from .scenario import config_from_dict, replace
 
 if TYPE_CHECKING:
@@ -132,6 +132,10 @@ def check(study: Study, figure: str) -> list[str]:
             raise SweepError(f"{path} holds {len(configs)} configurations with {label}; --check needs exactly one")
         values = {k: v.item() if hasattr(v, "item") else v for k, v in configs.iloc[0].items()}
         mine = mine.sort_values("trial")
+        trials = mine["trial"].to_numpy()
+        if len(trials) and not np.array_equal(trials, np.arange(trials[0], trials[0] + len(trials))):
+            raise SweepError(f"{path} holds the trials {_show(trials.tolist())} for {label}; --check re-runs "
+                             "consecutive trials, each once")
         # the table's values are data: validated (ranges, run size) as a config file's before anything runs
         try:
             config = replace(config_from_dict({}), {**values, "trials": len(mine),

@@ -78,6 +78,13 @@ REDRAWN = [
     ("fig17", "accuracy", lambda table: table.slice(0, 0), "holds no rows"),
     ("fig18", "winner_soh", lambda table: pa.concat_tables([table, table.slice(0, 1)]), "repeats soc, mass_kg, "
                                                                                         "distance_m = "),
+    ("fig20", "pending", set_first("arrival_week", 2**62), "column 'arrival_week' holds 4611686018427387904"),
+    ("fig16", "backlog", set_first("arrival_week", -5), "column 'arrival_week' holds -5 at row 0"),
+    ("fig17", "accuracy", set_first("week", 1001), "column 'week' holds 1001 at row 0"),
+    ("fig10", "runs", set_first("strategy", "evilmod:x"), "strategy = 'evilmod:x'"),
+    ("fig09", "runs", set_first("n_chargers", -3), "n_chargers = -3"),
+    ("fig09", "runs", set_first("n_chargers", 10**9), "n_chargers = 1000000000"),
+    ("fig12", "bounds", set_first("transfer_loss", 2.0), "transfer_loss = 2.0"),
 ]
 
 

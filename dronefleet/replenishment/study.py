@@ -93,7 +93,6 @@ def tidy(study: Study, figure: str) -> None:
 
 def draw(study: Study, figure: str) -> list[Path]:
     """The figure's files (PNG, PDF, SVG) from its tables alone."""
-    from ..reproduce import _read
     from . import figures
 
     runs = _read(study, figure, "runs")
@@ -101,6 +100,31 @@ def draw(study: Study, figure: str) -> list[Path]:
     if figure == "fig09":
         return figures.heatmaps(runs, path)
     return figures.work_and_efficiency(runs, _read(study, figure, "bounds"), path, **CURVES[figure])
+
+
+#: The most configurations a figure's table may hold (the largest figure, 9, draws 36).
+MAX_CONFIGURATIONS = 1000
+
+
+def _read(study: Study, figure: str, name: str) -> pd.DataFrame:
+    """The table ``name`` of ``figure``, its columns checked (:func:`dronefleet.reproduce._read`) and
+    each of its configurations held to a config file's rules (a strategy, a number of chargers, a
+    ratio the model allows), so a tampered table is one line naming it before anything is drawn or run."""
+    from ..reproduce import _read
+
+    table = _read(study, figure, name)
+    path = study.root / figure / f"{name}.parquet"
+    configs = table[list(CONFIG_COLUMNS)].drop_duplicates()
+    if len(configs) > MAX_CONFIGURATIONS:
+        raise SweepError(f"{path} holds {len(configs)} configurations; a figure's table holds at most "
+                         f"{MAX_CONFIGURATIONS}")
+    for values in configs.to_dict("records"):
+        try:
+            replace(config_from_dict({}), values)
+        except ConfigError as error:
+            raise SweepError(f"{path}: the configuration strategy={values['strategy']!r} is not one the "
+                             f"model allows: {error}") from None
+    return table
 
 
 def _same(a, b):
@@ -113,7 +137,6 @@ def check(study: Study, figure: str) -> list[str]:
     Returns the differences, one line each; logs one line per configuration ending in
     ``identical`` when all its values agree.
     """
-    from ..reproduce import _read
     from .simulate import simulate
 
     path = study.root / figure / "runs.parquet"

@@ -692,12 +692,18 @@ def _layout_keys(record: Path, out: Path) -> tuple[str, ...]:
 
 
 def check_layout(sweep: Sweep, out: Path) -> None:
-    """Refuse a sweep whose partition keys differ from those of the dataset already in ``out``.
+    """Refuse a sweep whose partition keys differ from those of the dataset already in ``out``, or
+    whose dataset has something else than a folder where a table's files go.
 
     The grid decides the layout: a sweep of the same name with a grid key moved to [set]
     would write a second layout beside the first, and readers of the folder would then see
     runs twice (DuckDB refuses it: "Hive partition mismatch").
     """
+    for table in sweep.scenario.tables:  # every run of the table would fail at it: said once, before any
+        folder = out / table
+        if os.path.lexists(folder) and not folder.is_dir():
+            raise SweepError(f"the dataset {out} is damaged: {str(folder)!r}, the folder of its {table} files, "
+                             "is not a folder: move or remove it")
     keys = sweep.runs[0].keys
     found = _found_layout(out, sweep.scenario.tables)
     if found is not None and found != keys:

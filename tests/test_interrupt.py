@@ -200,3 +200,20 @@ def test_ctrl_c_while_the_command_loads_its_modules_is_interrupted(tmp_path):
                           capture_output=True, text=True, cwd=tmp_path, timeout=120)
     assert (done.returncode, done.stderr) == (130, "dronefleet: interrupted\n")
     assert not (tmp_path / "out").exists()
+
+
+ENDED = '''
+import os, signal, sys
+import dronefleet.__main__
+sys.argv = ["dronefleet", "run", "absent.toml"]  # refused: returns 2 at once
+code = dronefleet.__main__.main()
+os.kill(os.getpid(), signal.SIGINT)  # a Ctrl-C as the interpreter exits, its work done
+print("exiting", flush=True)
+sys.exit(code)
+'''
+
+
+def test_ctrl_c_once_the_command_has_ended_does_not_undo_its_exit_code(tmp_path):
+    done = subprocess.run([sys.executable, "-c", ENDED], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "absent.toml" in done.stderr, done.stderr
+    assert done.stdout == "exiting\n"

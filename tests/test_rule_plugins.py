@@ -126,6 +126,15 @@ def int_score(f, w_norm, soc, theta, rng):
 int_score.bids_on = "policy"
 
 
+@njit
+def out_of_bounds(f, w_norm, soc, theta, rng):
+    scores = np.zeros(2)  # allocates, as a rule may
+    return True, scores[int(soc) * 1000000 + 7]
+
+
+out_of_bounds.bids_on = "any"
+
+
 def __getattr__(name):
     if name == "unready":
         raise RuntimeError(f"{name} is not ready")
@@ -208,6 +217,7 @@ def test_a_plugin_that_exits_is_a_config_error_of_the_api(rule, tmp_path, monkey
     ("nan_score", "the winner rule '{m}:nan_score' scored the bid of UAV 0 at t = 0 s NaN or infinite; "
                   "a rule's score must be a finite number"),
     ("raises", "the winner rule '{m}:raises' raised ValueError: no battery reading ({m}.py, line "),
+    ("out_of_bounds", "the winner rule '{m}:out_of_bounds' raised IndexError"),  # a crash (SIGSEGV) otherwise
 ])
 def test_a_rule_that_breaks_the_contract_while_running_stops_the_run_in_one_line(rule, fragment, rules_module,
                                                                                  tmp_path, capsys):

@@ -299,6 +299,9 @@ def _checked(kernel) -> Rule:
     if not isinstance(bids_on, str) or bids_on not in BIDS_ON:  # a list would not even hash
         raise RuleError(f"has bids_on = {bids_on!r}; set the function's attribute bids_on to one of "
                         f"{', '.join(map(repr, BIDS_ON))} (see dronefleet.delivery.auction)")
+    # An index out of an array's bounds is then an IndexError naming the rule, not a crash (SIGSEGV)
+    # or a wrong score; a rule is a few operations of the auction, the check costs little.
+    kernel.targetoptions["boundscheck"] = True
     try:
         # With the return type given, numba converts what the rule returns (a literal True, an int score).
         kernel.compile(RULE_SIGNATURE)
@@ -316,7 +319,7 @@ def _checked(kernel) -> Rule:
     # Compiled for the return type, numba converts what the rule returns: a literal True or an
     # int score, but also a (score, bids) pair the wrong way round. What it returns of itself tells.
     returns = _own_return_type(kernel)
-    if not (isinstance(returns, types.BaseTuple) and len(returns) == 2 and isinstance(returns[0], types.Boolean)
+    if returns is not None and not (isinstance(returns, types.BaseTuple) and len(returns) == 2 and isinstance(returns[0], types.Boolean)
             and isinstance(returns[1], (types.Float, types.Integer))):
         raise RuleError(f"returns {returns}, not (bids, score): a bool, then a float, in this order")
     return Rule(PLUGIN, kernel, bids_on)
@@ -348,10 +351,16 @@ class _TypingPipeline(compiler.CompilerBase):
 
 
 def _own_return_type(kernel):
-    """The numba type a rule returns for RULE_ARGS when no return type is imposed."""
-    with global_compiler_lock:
-        return compiler.compile_extra(cpu_target.typing_context, cpu_target.target_context, kernel.py_func,
-                                      RULE_ARGS, None, compiler.Flags(), {}, pipeline_class=_TypingPipeline)
+    """The numba type a rule returns for RULE_ARGS when no return type is imposed; None if this
+    front end cannot tell (the rule compiled for the contract already, with numba's own pipeline)."""
+    flags = compiler.Flags()
+    flags.nrt = True  # as @njit: a rule may allocate (np.zeros)
+    try:
+        with global_compiler_lock:
+            return compiler.compile_extra(cpu_target.typing_context, cpu_target.target_context, kernel.py_func,
+                                          RULE_ARGS, None, flags, {}, pipeline_class=_TypingPipeline)
+    except NumbaError:
+        return None
 
 
 @njit(cache=True)

@@ -271,17 +271,17 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set tau_minutes=20 or --set auction.rule=random")
     p.add_argument("--seed", type=int, help="seed of the run (overrides run.seed)")
-    p.add_argument("--out", metavar="DIR",
+    p.add_argument("--out", type=_path, metavar="DIR",
                    help="output folder, written complete or not at all (default: results/runs/<config>-seed<N>-<H>, "
                         "H the first 8 hex digits of the SHA-256 of the resolved config as JSON, so runs of "
                         "different configs never share a folder)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace the run already in --out (and the file --save-fleet names); without it, "
                         "the run is refused before any work")
-    p.add_argument("--fleet", metavar="FILE",
+    p.add_argument("--fleet", type=_path, metavar="FILE",
                    help="start from a saved fleet (parquet, '{seed}' is replaced by the seed); "
                         "same as --set run.fleet_file=FILE")
-    p.add_argument("--save-fleet", metavar="FILE",
+    p.add_argument("--save-fleet", type=_path, metavar="FILE",
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.add_argument("--replay", action="store_true",
                    help="also write replay.html beside the tables: a page that plays the run in a browser")
@@ -290,7 +290,7 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
                             description="A page that plays a run folder in any browser, offline: delivery "
                                         "flights, or the first trial's robots of a replenishment run.")
     p.add_argument("run_dir", metavar="RUN_DIR", help="a run folder that dronefleet run wrote")
-    p.add_argument("--out", metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
+    p.add_argument("--out", type=_path, metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
     p.set_defaults(func=replay_command)
     p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
                             description="Work and efficiency bounds of docs/replenishment-model.md section 9, both "
@@ -316,6 +316,13 @@ def _at_least(least):
     return integer
 
 
+def _path(text: str) -> str:
+    """argparse type: a path, not empty (an empty one would mean the default, or the current folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError("expected a path, got an empty one ''")
+    return text
+
+
 def _add_sweep_commands(commands):
     """``dronefleet sweep plan|run|status|collect SWEEP``; the handlers are in :mod:`dronefleet.sweeps`."""
     parser = commands.add_parser("sweep", help="parameter sweeps: plan a job array, run, status, collect",
@@ -323,10 +330,10 @@ def _add_sweep_commands(commands):
     actions = parser.add_subparsers(dest="action", required=True)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/rules.toml")
-    common.add_argument("--results", default="results", metavar="DIR",
+    common.add_argument("--results", type=_path, default="results", metavar="DIR",
                         help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
     p = actions.add_parser("plan", parents=[common], help="print the runs and tasks, write a SLURM job-array script")
-    p.add_argument("--out", help="where to write the script (default: DIR/<name>/<name>.sbatch)")
+    p.add_argument("--out", type=_path, help="where to write the script (default: DIR/<name>/<name>.sbatch)")
     p.add_argument("--time", help="#SBATCH --time of each task, e.g. 00:30:00")
     p.add_argument("--partition", help="#SBATCH --partition")
     p.add_argument("--account", help="#SBATCH --account")
@@ -365,7 +372,7 @@ def _add_reproduce_command(commands, arguments):
                        f"{name} figures with {study.QUICK}" for name, study in studies.items()))
     p.add_argument("--jobs", type=_at_least(1), metavar="J", help="local processes for the sweeps (default: all CPUs)")
     root = p.add_mutually_exclusive_group()
-    root.add_argument("--out", type=Path, metavar="DIR",
+    root.add_argument("--out", type=lambda text: Path(_path(text)), metavar="DIR",
                       help=f"results root: the sweeps' runs in DIR/<sweep>/, each figure's tables and drawings in "
                            f"DIR/<figure>/ (default: {reproduce.DEFAULT_OUT}; with --check: "
                            f"{reproduce.COMMITTED_RESULTS})")

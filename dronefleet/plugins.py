@@ -11,6 +11,8 @@ import logging
 import threading
 from collections.abc import Iterator
 
+from .config import _show
+
 logger = logging.getLogger(__name__)
 
 #: After how long a plugin module still importing is said to be [s] (it may hang: Ctrl-C stops it).
@@ -29,7 +31,7 @@ def importing(module_name: str, what: str, notice_s: float = IMPORT_NOTICE_S) ->
     try:
         yield
     except SystemExit as e:  # not an Exception: it would end the process, silently
-        raise ImportError(f"it calls sys.exit({e.code!r}) when imported") from None
+        raise ImportError(f"it calls sys.exit({_show(e.code)})") from None
     except KeyboardInterrupt:
         raise KeyboardInterrupt(f"while importing module {module_name!r} of {what}") from None
     finally:

@@ -262,6 +262,8 @@ KINDS = {
     "text": (_is_text, _any, "text", False),
     "integer": (pa.types.is_integer, _any, "an integer", False),
     "count": (pa.types.is_integer, lambda x: x >= 0, "an integer >= 0", False),
+    # a week of a run: runs are at most 1000 weeks long (delivery's horizon_weeks)
+    "week": (pa.types.is_integer, lambda x: (x >= 0) & (x <= 1000), "an integer in [0, 1000]", False),
     "key": (_is_number, np.isfinite, "a finite number", False),
     "number": (_is_number, lambda x: ~np.isinf(x), "a number, NaN or null (not infinite)", True),
     "flag": (pa.types.is_boolean, _any, "true or false", False),
@@ -271,14 +273,14 @@ KINDS = {
 TABLE_COLUMNS = {
     "outcomes": {"rule": "text", "tau_minutes": "key", "delivered": "count", "median_delivery_time_s": "number",
                  "aborted_pct": "number"},
-    "backlog": {"rule": "text", "tau_minutes": "key", "arrival_week": "integer", "backlog_age_s": "number"},
-    "accuracy": {"rule": "text", "week": "integer", "mean_accuracy": "number", "ci_low": "number",
+    "backlog": {"rule": "text", "tau_minutes": "key", "arrival_week": "week", "backlog_age_s": "number"},
+    "accuracy": {"rule": "text", "week": "week", "mean_accuracy": "number", "ci_low": "number",
                  "ci_high": "number", "confidence": "key"},
     "winner_soh": {"soc": "key", "distance_m": "key", "mass_kg": "key", "mean_winner_soh": "number"},
     "thresholds": {"theta": "key", "runs": "count", "delivered_mean": "number", "delivered_median": "number",
                    "median_delivery_time_s": "number", "aborted_pct_mean": "number", "pending_mean": "number",
                    "backlog_age_s_mean": "number", "best": "flag"},
-    "pending": {"rule": "text", "seed": "integer", "arrival_week": "integer", "pending": "count"},
+    "pending": {"rule": "text", "seed": "integer", "arrival_week": "week", "pending": "count"},
     "runs": {"sweep": "text", "run": "text"},
 }
 

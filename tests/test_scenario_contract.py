@@ -105,7 +105,7 @@ WALK = (EXAMPLE / "dronefleet_scenario_random_walk" / "__init__.py").read_text()
 @pytest.mark.parametrize("text, fragment", [
     (None, "fails to load: ModuleNotFoundError"),
     ("raise RuntimeError('no licence server')\n", "fails to load: RuntimeError: no licence server"),
-    ("import sys\nsys.exit(3)\n", "fails to load: ImportError: it calls sys.exit(3) when imported"),
+    ("import sys\nsys.exit(3)\n", "fails to load: ImportError: it calls sys.exit(3)"),
     (WALK.replace("\ndef simulate(config):", "\ndef simulated(config):"),
      "does not meet the scenario contract (docs/scenario-contract.md): has no simulate"),
     (WALK.replace("\ndef simulate(config):", "\ndef simulate(config, trials):"), "simulate does not take (config)"),

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..config import ConfigError, SweepError
+from ..config import ConfigError, SweepError, _show
 from ..contract import StudyContext
 from . import experiments
 from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
@@ -101,11 +101,34 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     """The figure's files (PNG, PDF, SVG) from its tables alone."""
     from . import figures
 
-    runs = study.read_table(figure, "runs")
+    runs = _read(study, figure, "runs")
     path = study.root / figure / figure
     if figure == "fig09":
         return figures.heatmaps(runs, path)
-    return figures.work_and_efficiency(runs, study.read_table(figure, "bounds"), path, **CURVES[figure])
+    return figures.work_and_efficiency(runs, _read(study, figure, "bounds"), path, **CURVES[figure])
+
+
+#: The most configurations a figure's table may hold (the largest figure, 9, draws 36).
+MAX_CONFIGURATIONS = 1000
+
+
+def _read(study: StudyContext, figure: str, name: str) -> pd.DataFrame:
+    """The table ``name`` of ``figure``, its columns checked (``study.read_table``) and each of its
+    configurations held to a config file's rules (a strategy, a number of chargers, a ratio the
+    model allows), so a tampered table is one line naming it before anything is drawn or run."""
+    table = study.read_table(figure, name)
+    path = study.root / figure / f"{name}.parquet"
+    configs = table[list(CONFIG_COLUMNS)].drop_duplicates()
+    if len(configs) > MAX_CONFIGURATIONS:
+        raise SweepError(f"{path} holds {len(configs)} configurations; a figure's table holds at most "
+                         f"{MAX_CONFIGURATIONS}")
+    for values in configs.to_dict("records"):
+        try:
+            replace(config_from_dict({}), values)
+        except ConfigError as error:
+            raise SweepError(f"{path}: the configuration strategy={values['strategy']!r} is not one the "
+                             f"model allows: {error}") from None
+    return table
 
 
 def _same(a, b):
@@ -124,7 +147,7 @@ def check(study: StudyContext, figure: str) -> list[str]:
     if not path.exists():
         raise SweepError(f"{path} is missing: run dronefleet reproduce {figure}{' --quick' if study.quick else ''} "
                          "first (it writes the table that --check compares with)")
-    committed = study.read_table(figure, "runs")
+    committed = _read(study, figure, "runs")
     study.log(f"{figure}: re-running {len(CHECK_CONFIGS[figure])} configurations of the "
               f"{len(committed.groupby(list(CONFIG_COLUMNS)))} in {path}")
     differences = []
@@ -136,6 +159,10 @@ def check(study: StudyContext, figure: str) -> list[str]:
             raise SweepError(f"{path} holds {len(configs)} configurations with {label}; --check needs exactly one")
         values = {k: v.item() if hasattr(v, "item") else v for k, v in configs.iloc[0].items()}
         mine = mine.sort_values("trial")
+        trials = mine["trial"].to_numpy()
+        if len(trials) and not np.array_equal(trials, np.arange(trials[0], trials[0] + len(trials))):
+            raise SweepError(f"{path} holds the trials {_show(trials.tolist())} for {label}; --check re-runs "
+                             "consecutive trials, each once")
         # the table's values are data: validated (ranges, run size) as a config file's before anything runs
         try:
             config = replace(config_from_dict({}), {**values, "trials": len(mine),

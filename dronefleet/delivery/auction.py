@@ -319,8 +319,9 @@ def _checked(kernel) -> Rule:
     # Compiled for the return type, numba converts what the rule returns: a literal True or an
     # int score, but also a (score, bids) pair the wrong way round. What it returns of itself tells.
     returns = _own_return_type(kernel)
-    if returns is not None and not (isinstance(returns, types.BaseTuple) and len(returns) == 2 and isinstance(returns[0], types.Boolean)
-            and isinstance(returns[1], (types.Float, types.Integer))):
+    if returns is not None and not (isinstance(returns, types.BaseTuple) and len(returns) == 2
+                                    and isinstance(returns[0], types.Boolean)
+                                    and isinstance(returns[1], (types.Float, types.Integer))):
         raise RuleError(f"returns {returns}, not (bids, score): a bool, then a float, in this order")
     return Rule(PLUGIN, kernel, bids_on)
 

@@ -19,11 +19,11 @@ from typing import Any
 
 from . import scenarios
 from .config import SCENARIO_KEY, ConfigError
-from .datafiles import DataError, parquet_schema, read_parquet
+from .datafiles import DataError, parquet_schema
 from .outputs import check_output_file, writing
 from .records import CONFIG_KEY, REPLAY_FILE, read_config_dict, run_dir_state, write_atomic
 
-__all__ = ["scenario_of_run", "chosen_trial", "page", "write"]
+__all__ = ["scenario_of_run", "page", "write"]
 
 TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
 
@@ -58,23 +58,6 @@ def scenario_of_run(run_dir: str | os.PathLike) -> scenarios.Scenario:
         raise ConfigError(f"RUN_DIR {str(run_dir)!r}: {', '.join(strays)} not of the run in summary.parquet "
                           "(another run's config, or unreadable); write the run again with dronefleet run")
     return scenario
-
-
-def chosen_trial(run_dir: Path, trials: range, trial: int | None) -> int:
-    """``trial`` (None: the first of ``trials``, the trials its config says the run in ``run_dir``
-    holds); ConfigError (one line) if the config does not hold it or the run's ``summary.parquet``
-    has no row of it (a table whose rows are not its config's)."""
-    import pyarrow as pa
-
-    chosen = trials.start if trial is None else trial
-    if chosen not in trials:
-        raise ConfigError(f"--trial {chosen}: RUN_DIR {str(run_dir)!r} holds trials {trials.start} to "
-                          f"{trials.stop - 1}")
-    summary = run_dir / "summary.parquet"
-    if chosen not in read_parquet(summary, {"trial": pa.int64()}).column("trial").to_pylist():
-        raise DataError(f"table {str(summary)!r} has no row of trial {chosen}, one of the trials "
-                        f"{trials.start} to {trials.stop - 1} its config says the run holds")
-    return chosen
 
 
 def _json_ready(value):
@@ -126,7 +109,7 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None 
     # or pass for that run's page
     own_page = out.name == REPLAY_FILE and out.parent.resolve() == run_dir.resolve()
     if not own_page and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
-                            for s in scenarios.SCENARIOS.values()):
+                            for s in scenarios.registered().values()):
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
     # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it

@@ -107,8 +107,9 @@ def _check_totals(summary: Path, trial: int, totals: np.ndarray) -> None:
                         "another run or dronefleet version; write the run again with dronefleet run")
 
 
-def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
-    """The page's data of the items run in ``run_dir``: trial ``trial`` (None: its first).
+def replay_data(run_dir: Path, config: Any, description: str, trial: int) -> dict[str, Any]:
+    """The page's data of trial ``trial`` of the items run in ``run_dir``, of ``config`` (a
+    :class:`dronefleet.items.params.Params` read from its summary), described as ``description``.
 
     Returns a JSON-ready dict: ``title``, ``duration_s`` (= steps T: one page second per step),
     ``mode``, ``truth``, ``algorithm``, ``trial``, ``n_robots``, ``capacity``, ``home`` [x, y];
@@ -119,17 +120,13 @@ def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
     ``served``, ``generated`` (cumulative as the summary counts them, its last values are the
     trial's; logistic: foraged and A19's net growth).
 
-    ConfigError (one line, before the simulation) if ``trial`` is not one of the run's
-    trials or the page would hold more than :data:`MAX_VALUES` values; DataError (one line) if
+    ConfigError (one line, before the simulation) if the page would hold more than
+    :data:`MAX_VALUES` values (the scenario's hook checked ``trial``); DataError (one line) if
     the trial simulated again does not give the summary's generated and served.
     """
-    from ..replay import chosen_trial
     from . import kernel as k
-    from .scenario import describe, read_config, replicates
     from .simulate import run_cell
 
-    config = read_config(run_dir / "summary.parquet")
-    trial = chosen_trial(run_dir, replicates(config), trial)
     reason = _too_large(config)
     if reason is not None:
         raise ConfigError(f"RUN_DIR {str(run_dir)!r}: {reason}")
@@ -152,7 +149,7 @@ def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
     x, y = _paths(trace, positions)
     return {
         "scenario": "items",
-        "title": f"items run, trial {trial} of: {describe(config)}",
+        "title": f"items run, trial {trial} of: {description}",
         "duration_s": config.steps,
         "mode": config.mode,
         "truth": config.truth,

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
-from ..scenarios import Field
+from ..contract import Field
 from .params import KEYS, Params, allowed, check
 from .simulate import robot_columns, summary_columns
 
@@ -254,10 +254,13 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
 
 
 def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
-    """The replay page's data of a run folder: :func:`dronefleet.items.replay.replay_data`."""
+    """The replay page's data of a run folder (its config read from ``summary.parquet``), of its
+    trial ``trial`` (None: its first): :func:`dronefleet.items.replay.replay_data`."""
+    from ..records import chosen_trial
     from .replay import replay_data as data
 
-    return data(run_dir, trial)
+    config = read_config(run_dir / "summary.parquet")
+    return data(run_dir, config, describe(config), chosen_trial(run_dir, replicates(config), trial))
 
 
 def check_replayable(config: Config) -> None:

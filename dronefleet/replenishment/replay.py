@@ -9,12 +9,11 @@ every robot's centre, battery and controller phase at each sample of the time se
 
 import dataclasses
 import math
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .kernel import DT, RADIUS, TS_STORED, TS_WORK, WALL
+from .kernel import DT, PHASES, RADIUS, TS_STORED, TS_WORK, WALL
 
 __all__ = ["replay_data", "AREAS", "MAX_FRAMES"]
 
@@ -27,9 +26,9 @@ AREAS = {"base": [-0.825, -0.5, -0.825, 0.825], "transfer": [0.2, 0.5, -0.825, 0
 MAX_FRAMES = 20_000
 
 
-def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
-    """The page's data of the replenishment run in ``run_dir``: trial ``trial`` (None: its first;
-    ConfigError, one line, if the run does not hold it).
+def replay_data(config: Any, description: str, trial: int) -> dict[str, Any]:
+    """The page's data of trial ``trial`` of a replenishment run of ``config`` (a
+    :class:`dronefleet.replenishment.config.Config`, described as ``description``).
 
     Returns a JSON-ready dict: ``title``, ``duration_s`` (ticks x 0.1 s), ``frame_s`` (time
     between frames [s]), ``n_workers``, ``n_chargers``, ``capacity`` (per robot [energy
@@ -38,12 +37,8 @@ def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
     ``phase``; and per frame ``work`` (cumulative points) and ``stored`` (energy in all
     batteries).
     """
-    from ..replay import chosen_trial
-    from .scenario import _PHASES, describe, read_config, replicates
     from .simulate import simulate
 
-    config = read_config(run_dir / "summary.parquet")
-    trial = chosen_trial(run_dir, replicates(config), trial)
     p = config.params
     stride = math.ceil((p.ticks // p.sample_every + 1) / MAX_FRAMES)
     # sampling only reads the state: every stride-th sample of the run, and no other
@@ -53,7 +48,7 @@ def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
     areas = AREAS if p.mobile else {name: area for name, area in AREAS.items() if name != "transfer"}
     return {
         "scenario": "replenishment",
-        "title": f"replenishment run, trial {trial} of: {describe(config)}",
+        "title": f"replenishment run, trial {trial} of: {description}",
         "duration_s": p.ticks * DT,
         "frame_s": p.sample_every * stride * DT,
         "n_workers": p.n_workers,
@@ -62,7 +57,7 @@ def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
         "wall_m": WALL,
         "radius_m": RADIUS,
         "areas": areas,
-        "phases": {"workers": list(_PHASES["workers"]), "chargers": list(_PHASES["chargers"])},
+        "phases": {"workers": list(PHASES["workers"]), "chargers": list(PHASES["chargers"])},
         "x": np.round(track["x"], 4).reshape(-1).tolist(),
         "y": np.round(track["y"], 4).reshape(-1).tolist(),
         "energy": np.round(track["energy"], 2).reshape(-1).tolist(),

@@ -13,11 +13,12 @@ from test_replay import _refused, chromium, counters, embedded, needs_chromium
 from dronefleet import cli
 from dronefleet.items import kernel as k
 from dronefleet.items import replay as items_replay
-from dronefleet.items.replay import replay_data, trial_world
+from dronefleet.items.replay import trial_world
+from dronefleet.items.scenario import replay_data
 from dronefleet.items.scenario import read_config
 from dronefleet.items.simulate import grid_positions, run_cell
 from dronefleet.records import CONFIG_KEY, REPLAY_FILE
-from dronefleet.replenishment.replay import replay_data as replenishment_data
+from dronefleet.replenishment.scenario import replay_data as replenishment_data
 
 #: One run per mode: FP Poisson with GR, IDP Bernoulli on a 6 x 6 grid with GRIC, logistic FP with SF.
 RUNS = {

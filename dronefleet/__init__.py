@@ -11,7 +11,7 @@ grid of runs, of any scenario (:mod:`dronefleet.api`).
 
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from .provenance import __version__
 
 __all__ = ["Run", "__version__", "run", "sweep"]
 

@@ -2,20 +2,44 @@
 
 The command's modules are imported inside :func:`main`, so that a Ctrl-C while they load (half
 a second of numpy, pyarrow and the like) ends like one at any later moment: "interrupted",
-exit code 130, no traceback.
+exit code 130, no traceback. SIGTERM (a scheduler ending a job at its time limit, ``kill``)
+stops the command the same way, and it ends with exit code 143 (128 + 15) instead. Once the
+command has ended, both are ignored: the interpreter's exit (up to half a second of tearing
+down numba and pyarrow) has nothing left to stop, and the signal would end the process by
+its default action, without a word, after its work was done.
 """
 
+import signal
 import sys
+
+#: The exit code of a command ended by SIGTERM, as a shell reports a process the signal killed.
+TERMINATED = 128 + signal.SIGTERM
+
+
+def _terminate(signum, frame):
+    global _terminated
+    _terminated = True
+    raise KeyboardInterrupt("by SIGTERM")
+
+
+_terminated = False
 
 
 def main() -> int:
     """Run the ``dronefleet`` command with the process's arguments; return its exit code."""
+    signal.signal(signal.SIGTERM, _terminate)
     try:
         from .cli import main as command
-    except KeyboardInterrupt:
-        print("dronefleet: interrupted", file=sys.stderr)
-        return 130
-    return command()
+
+        code = command()
+    except KeyboardInterrupt as interrupted:  # while the command's modules load, or as it returns
+        print(f"dronefleet: interrupted{f' {interrupted}' if str(interrupted) else ''}", file=sys.stderr)
+        code = 130
+    finally:  # a handler that does nothing, not SIG_IGN: Python meets a signal that came just before
+        # the change to SIG_IGN with "OSError: Signal ignored due to race condition"
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, lambda signum, frame: None)
+    return TERMINATED if _terminated and code == 130 else code
 
 
 if __name__ == "__main__":

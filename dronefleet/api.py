@@ -51,11 +51,12 @@ def _source(config: Any, argument: str) -> tuple[Scenario, str | os.PathLike | N
     """``(scenario, config file or None)`` of a ``config``/``base`` argument (see the module doc)."""
     if config is None:
         return scenarios.SCENARIOS["delivery"], None
-    if isinstance(config, str) and config in scenarios.SCENARIOS:
-        return scenarios.SCENARIOS[config], None
+    registered = scenarios.registered()
+    if isinstance(config, str) and config in registered:
+        return scenarios.get(config), None  # an installed one is loaded and checked here
     if not isinstance(config, (str, os.PathLike)):
         raise ConfigError(f"{argument}={_show(config)}: expected None, a scenario name "
-                          f"({', '.join(map(repr, scenarios.SCENARIOS))}) or the path of a TOML config file")
+                          f"({', '.join(map(repr, registered))}) or the path of a TOML config file")
     return scenarios.scenario_of(config), config
 
 
@@ -179,9 +180,9 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
     Parameters
     ----------
     config : str, path or None
-        None: the paper's delivery scenario (``configs/paper.toml``); a scenario's name
-        (``"delivery"``, ``"replenishment"``): its defaults; else a TOML config file of any
-        scenario (it names its own).
+        None: the paper's delivery scenario (``configs/paper.toml``); a registered scenario's
+        name (``"delivery"``, ``"replenishment"``, or one installed from another package): its
+        defaults; else a TOML config file of any scenario (it names its own).
     seed : int, optional
         The scenario's seed key: delivery's ``seed`` (all randomness derives from it,
         0 .. 2**63 - 1), replenishment's ``first_trial`` (trial k uses seed 876 k).

@@ -1,7 +1,7 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
 [--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
-``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce fig09..fig12|fig16..fig20|all [--quick]``;
-``dronefleet replay RUN_DIR [--out FILE.html]``.
+``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce FIGURE...|all [--quick]``, ``--list``;
+``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``.
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery.
 ``-q`` prints warnings and errors only, ``-v`` adds debugging detail (before or after the command)."""
 
@@ -22,34 +22,6 @@ from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, check_output_file, probe_folders, writing
 
 log = logging.getLogger("dronefleet.cli")  # not __name__: python -m dronefleet.cli runs it as __main__
-
-
-def _duration(seconds):
-    if seconds != seconds:  # nan
-        return "n/a"
-    hours, rest = divmod(seconds, 3600.0)
-    return f"{int(hours)} h {rest / 60.0:04.1f} min"
-
-
-def format_summary(m: dict, wall_s: float | None = None) -> str:
-    """The run's summary as printed by ``dronefleet run`` (``m`` from ``metrics.run_metrics``;
-    the wall time line only if ``wall_s`` is given)."""
-    delivered_pct = 100.0 * m["delivered"] / m["orders_arrived"] if m["orders_arrived"] else float("nan")
-    lines = [
-        ("orders arrived", f"{m['orders_arrived']}"),
-        ("delivered", f"{m['delivered']} ({delivered_pct:.1f} %)"),
-        ("median delivery time", f"{_duration(m['median_delivery_time_s'])} ({m['median_delivery_time_s']:.0f} s)"),
-        ("aborted attempts", f"{m['aborted_pct']:.1f} % ({m['aborted_attempts']} of {m['attempts']})"),
-        ("backlog age", f"{m['backlog_age_s'] / 86400.0:.1f} days over {m['pending']} pending orders"),
-        ("lost UAVs", f"{m['lost_uavs']}"),
-        ("decision accuracy", f"{100.0 * m['decision_accuracy']:.1f} % (fleet mean at the end)"),
-    ]
-    if m["reservations_won"]:
-        lines.append(("reservations won", f"{m['reservations_won']}, median wait "
-                      f"{_duration(m['median_reservation_wait_s'])}, forecast met {m['forecast_met_pct']:.1f} %"))
-    if wall_s is not None:
-        lines.append(("wall time", f"{wall_s:.2f} s"))
-    return "\n".join(f"  {label:<22}{value}" for label, value in lines)
 
 
 def default_out(name: str, config: Any, tag: str | None = None) -> Path:
@@ -121,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     from .delivery.fleet import load_fleet, save_fleet, seeded_path
     from .delivery.metrics import run_metrics
     from .delivery.records import write_run
+    from .delivery.scenario import format_metrics
     from .delivery.simulation import InvalidStateError, RunTooLargeError, simulate
     from .supervisor import SupervisorError
 
@@ -152,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
         if fleet_out is not None:
             fleet_out.unlink(missing_ok=True)
         raise
-    log.info(format_summary(run_metrics(result), wall))
+    log.info(format_metrics(run_metrics(result), wall))
     log.info(f"  {'tables':<22}{out}/{{orders,attempts,fleet,timeseries,summary}}.parquet")
     if fleet_out is not None:
         log.info(f"  {'saved fleet':<22}{saved}")
@@ -170,12 +143,12 @@ def _write_replay(args, out):
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """``dronefleet replay RUN_DIR [--out FILE.html]``: the run's replay page (:mod:`dronefleet.replay`)."""
+    """``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``: the run's replay page (:mod:`dronefleet.replay`)."""
     from . import replay
     from .records import REPLAY_FILE
 
     out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
-    written = replay.write(args.run_dir, out)
+    written = replay.write(args.run_dir, out, args.trial)
     log.info(f"dronefleet replay: {written} ({written.stat().st_size / 1e6:.1f} MB)")
     return 0
 
@@ -187,6 +160,8 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
         if value:
             raise ConfigError(f"{flag} applies to delivery runs only, not to scenario {scenario.name!r}")
     config = scenario.load(args.config, args.set, args.seed)
+    if args.replay:
+        scenario.check_replayable(config)
     name = Path(args.config).stem
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config, scenario.label(config))
     check_outputs(out, None, args.overwrite, scenario.tables)
@@ -212,7 +187,7 @@ def bounds(args: argparse.Namespace) -> int:
     """``dronefleet bounds CONFIG``: the scenario's analytic bounds (docs/replenishment-model.md section 9)."""
     scenario, config = scenarios.load(args.config, args.set)
     if scenario.format_bounds is None:
-        having = [s.name for s in scenarios.SCENARIOS.values() if s.format_bounds is not None]
+        having = [s.name for s in scenarios.registered().values() if s.format_bounds is not None]
         raise ConfigError(f"{args.config!r} is a {scenario.name} config: analytic bounds exist only for "
                           f"{', '.join(having)}")
     text = scenario.format_bounds(config)  # refuses parameters where a bound does not exist
@@ -273,6 +248,19 @@ class _Version(argparse.Action):
         parser.exit()
 
 
+class _ListStudies(argparse.Action):
+    """``reproduce --list``: every study and its figures (:func:`dronefleet.reproduce.list_studies`)."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, help="list every study and its figures, and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from .reproduce import list_studies
+
+        print(list_studies())
+        parser.exit()
+
+
 def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     """The parser; without ``reproduce_arguments`` the reproduce command is only listed, so that
     ``dronefleet --help`` and ``--version`` do not import pandas and numba (:mod:`dronefleet.reproduce`)."""
@@ -285,26 +273,28 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set tau_minutes=20 or --set auction.rule=random")
     p.add_argument("--seed", type=int, help="seed of the run (overrides run.seed)")
-    p.add_argument("--out", metavar="DIR",
+    p.add_argument("--out", type=_path, metavar="DIR",
                    help="output folder, written complete or not at all (default: results/runs/<config>-seed<N>-<H>, "
                         "H the first 8 hex digits of the SHA-256 of the resolved config as JSON, so runs of "
                         "different configs never share a folder)")
     p.add_argument("--overwrite", action="store_true",
                    help="replace the run already in --out (and the file --save-fleet names); without it, "
                         "the run is refused before any work")
-    p.add_argument("--fleet", metavar="FILE",
+    p.add_argument("--fleet", type=_path, metavar="FILE",
                    help="start from a saved fleet (parquet, '{seed}' is replaced by the seed); "
                         "same as --set run.fleet_file=FILE")
-    p.add_argument("--save-fleet", metavar="FILE",
+    p.add_argument("--save-fleet", type=_path, metavar="FILE",
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.add_argument("--replay", action="store_true",
                    help="also write replay.html beside the tables: a page that plays the run in a browser")
     p.set_defaults(func=run)
     p = commands.add_parser("replay", help="write a run's replay page: one self-contained HTML file",
                             description="A page that plays a run folder in any browser, offline: delivery "
-                                        "flights, or the first trial's robots of a replenishment run.")
+                                        "flights, or one trial's robots of a replenishment or items run.")
     p.add_argument("run_dir", metavar="RUN_DIR", help="a run folder that dronefleet run wrote")
-    p.add_argument("--out", metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
+    p.add_argument("--out", type=_path, metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
+    p.add_argument("--trial", type=_at_least(1), metavar="K",
+                   help="the trial to play, of a run holding several (default: its first)")
     p.set_defaults(func=replay_command)
     p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
                             description="Work and efficiency bounds of docs/replenishment-model.md section 9, both "
@@ -330,6 +320,13 @@ def _at_least(least):
     return integer
 
 
+def _path(text: str) -> str:
+    """argparse type: a path, not empty (an empty one would mean the default, or the current folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError("expected a path, got an empty one ''")
+    return text
+
+
 def _add_sweep_commands(commands):
     """``dronefleet sweep plan|run|status|collect SWEEP``; the handlers are in :mod:`dronefleet.sweeps`."""
     parser = commands.add_parser("sweep", help="parameter sweeps: plan a job array, run, status, collect",
@@ -337,10 +334,10 @@ def _add_sweep_commands(commands):
     actions = parser.add_subparsers(dest="action", required=True)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/rules.toml")
-    common.add_argument("--results", default="results", metavar="DIR",
+    common.add_argument("--results", type=_path, default="results", metavar="DIR",
                         help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
     p = actions.add_parser("plan", parents=[common], help="print the runs and tasks, write a SLURM job-array script")
-    p.add_argument("--out", help="where to write the script (default: DIR/<name>/<name>.sbatch)")
+    p.add_argument("--out", type=_path, help="where to write the script (default: DIR/<name>/<name>.sbatch)")
     p.add_argument("--time", help="#SBATCH --time of each task, e.g. 00:30:00")
     p.add_argument("--partition", help="#SBATCH --partition")
     p.add_argument("--account", help="#SBATCH --account")
@@ -370,16 +367,16 @@ def _add_reproduce_command(commands, arguments):
         return
     from . import reproduce
 
-    p.add_argument("figure", nargs="+", choices=(*reproduce.FIGURES, "all"),
+    studies = reproduce.studies()
+    p.add_argument("figure", nargs="+", choices=(*reproduce.all_figures(), "all"),
                    help="one or more figures, or all (figures asked for together share their runs)")
+    p.add_argument("--list", action=_ListStudies)
     p.add_argument("--quick", action="store_true",
-                   help=f"a check in seconds, under <out>/quick/: delivery figures with seeds "
-                        f"{reproduce.QUICK_SEEDS[0]}-{reproduce.QUICK_SEEDS[-1]} and "
-                        f"{reproduce.QUICK_CHANGES['horizon_weeks']:g} weeks, replenishment figures with "
-                        f"{reproduce.replenishment.QUICK_TRIALS} trials of {reproduce.replenishment.QUICK_TICKS} ticks")
+                   help="a check in seconds, under <out>/quick/: " + ", ".join(
+                       f"{name} figures with {study.QUICK}" for name, study in studies.items()))
     p.add_argument("--jobs", type=_at_least(1), metavar="J", help="local processes for the sweeps (default: all CPUs)")
     root = p.add_mutually_exclusive_group()
-    root.add_argument("--out", type=Path, metavar="DIR",
+    root.add_argument("--out", type=lambda text: Path(_path(text)), metavar="DIR",
                       help=f"results root: the sweeps' runs in DIR/<sweep>/, each figure's tables and drawings in "
                            f"DIR/<figure>/ (default: {reproduce.DEFAULT_OUT}; with --check: "
                            f"{reproduce.COMMITTED_RESULTS})")

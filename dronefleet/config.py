@@ -29,8 +29,8 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Callable, Iterable, Mapping
 
-__all__ = ["ConfigError", "MAX_CONFIG_BYTES", "MAX_DEPTH", "SCENARIO_KEY", "check_depth", "read_toml", "shipped_config",
-           "too_deep"]
+__all__ = ["ConfigError", "SweepError", "MAX_CONFIG_BYTES", "MAX_DEPTH", "SCENARIO_KEY", "check_depth", "read_toml",
+           "shipped_config", "too_deep"]
 
 #: Largest config file read [bytes]; real ones are a few KB.
 MAX_CONFIG_BYTES = 1_000_000
@@ -45,8 +45,30 @@ class ConfigError(ValueError):
     """
 
     def __init__(self, message: str, keys: Iterable[str] = ()) -> None:
-        super().__init__(message)
+        super().__init__(one_line(message))  # a message quoting a file or a plugin's error stays one line
         self.keys = tuple(keys)
+
+
+class SweepError(ConfigError):
+    """A sweep file, task or results directory that cannot be used; the message says why.
+
+    Here, beside ConfigError, rather than in :mod:`dronefleet.sweeps`: the executors and the
+    scenarios' studies raise it too, and they sit below the sweeps (docs/scenario-contract.md).
+    """
+
+
+def one_line(text: str) -> str:
+    """``text`` on one line: each run of white space (newlines too) one space, any other character
+    that a terminal would act on (escape sequences) written as its Python escape."""
+    text = " ".join(str(text).split())
+    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+def brief(error: BaseException) -> str:
+    """A dependency's or a plugin's error, to quote in a message: on one line, cut to 200 characters
+    (its type's name if it says nothing)."""
+    text = one_line(str(error))
+    return (text if len(text) <= 200 else text[:197] + "...") or type(error).__name__
 
 
 #: Deepest nesting of tables and lists in a config or sweep file, or in a value given by ``--set`` or

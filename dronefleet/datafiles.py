@@ -23,7 +23,7 @@ import stat
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from .config import ConfigError, _show, too_deep
+from .config import ConfigError, _show, brief, too_deep
 
 if TYPE_CHECKING:
     import numpy
@@ -74,12 +74,6 @@ def read_bytes(path: str | os.PathLike, limit: int, kind: str = "file") -> bytes
     return data
 
 
-def _first_line(error: BaseException) -> str:
-    """The first line of an error's message, cut to 200 characters (or its type's name)."""
-    text = str(error).strip()
-    return text.splitlines()[0][:200] if text else type(error).__name__
-
-
 def parse_json(text: str | bytes, where: str, max_depth: int = MAX_JSON_DEPTH) -> Any:
     """``text`` parsed as JSON; DataError naming ``where`` if it is not JSON or nests deeper than
     ``max_depth``. Only plain values come out: JSON has no way to name code."""
@@ -88,7 +82,7 @@ def parse_json(text: str | bytes, where: str, max_depth: int = MAX_JSON_DEPTH) -
     except RecursionError:
         raise DataError(f"{where} nests lists or objects more than {max_depth} deep") from None
     except ValueError as e:  # JSONDecodeError, UnicodeDecodeError, an integer of too many digits
-        raise DataError(f"{where} is not valid JSON: {_first_line(e)}") from None
+        raise DataError(f"{where} is not valid JSON: {brief(e)}") from None
     if too_deep(value, max_depth) is not None:
         raise DataError(f"{where} nests lists or objects more than {max_depth} deep")
     return value
@@ -111,7 +105,7 @@ def parquet_schema(path: str | os.PathLike, kind: str = "table", limit: int = MA
     try:
         return pq.read_schema(path)
     except (pa.ArrowException, OSError, ValueError) as e:
-        raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({_first_line(e)})") from None
+        raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({brief(e)})") from None
 
 
 def parquet_rows(path: str | os.PathLike, kind: str = "table", limit: int = MAX_TABLE_BYTES) -> int:
@@ -124,7 +118,7 @@ def parquet_rows(path: str | os.PathLike, kind: str = "table", limit: int = MAX_
     try:
         return pq.ParquetFile(path).metadata.num_rows
     except (pa.ArrowException, OSError, ValueError) as e:
-        raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({_first_line(e)})") from None
+        raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({brief(e)})") from None
 
 
 def check_columns(schema, columns: Mapping[str, Any], path: str | os.PathLike, kind: str = "table",
@@ -170,7 +164,7 @@ def read_parquet(path: str | os.PathLike, columns: Mapping[str, Any], kind: str 
     try:
         return pq.read_table(path, columns=list(columns))
     except (pa.ArrowException, OSError, ValueError) as e:
-        raise DataError(f"{kind} {str(path)!r} is damaged ({_first_line(e)})") from None
+        raise DataError(f"{kind} {str(path)!r} is damaged ({brief(e)})") from None
 
 
 def checked_column(table: pyarrow.Table, name: str, path: str | os.PathLike, ok: Callable[[Any], Any], allowed: str,

@@ -21,7 +21,8 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import TypeVar
 
-from .sweeps import SweepError
+from . import interrupt
+from .config import SweepError
 
 #: ``prctl`` option: the signal the kernel sends this process when its parent dies (linux/prctl.h).
 _PR_SET_PDEATHSIG = 1
@@ -49,26 +50,43 @@ def _outcome(future):
         return None, error
 
 
+#: The signals that stop a sweep: Ctrl-C, and SIGTERM (a scheduler ending a job, ``scancel``).
+STOPPING = {signal.SIGINT, signal.SIGTERM}
+
+
 def _start_worker(parent):
-    """Worker initializer: Ctrl-C as :func:`_interruptible` says, and the end of the worker with its parent."""
-    # Started with SIGINT blocked (see local): ignored from now on, a Ctrl-C pending is dropped.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    """Worker initializer: Ctrl-C and SIGTERM as :func:`_interruptible` says, and the end of the
+    worker with its parent."""
+    # Started with them blocked (see local): ignored from now on, one pending is dropped.
+    for stopping in STOPPING:
+        signal.signal(stopping, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
     _die_with_parent(parent)
 
 
 def _interruptible(function, item):
-    """``function(item)`` in a worker, Ctrl-C raising KeyboardInterrupt meanwhile only.
+    """``function(item)`` in a worker, Ctrl-C or SIGTERM raising KeyboardInterrupt meanwhile only.
 
-    The terminal sends Ctrl-C to the workers too. An idle worker ignores it (it would print
-    a traceback of its own); a worker's item stops (its compiled kernel at its next check
-    point, see :mod:`dronefleet.interrupt`) and returns the KeyboardInterrupt to the parent.
+    The terminal sends Ctrl-C to the workers too, and SLURM its SIGTERM to every process of
+    a job. An idle worker ignores them (it would print a traceback of its own, or die); a
+    worker's item stops (its compiled kernel at its next check point, see
+    :mod:`dronefleet.interrupt`) and returns the KeyboardInterrupt to the parent.
     """
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    for stopping in STOPPING:
+        signal.signal(stopping, _stop_once)
     try:
         return function(item)
     finally:
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        for stopping in STOPPING:
+            signal.signal(stopping, interrupt.ignore)
+
+
+def _stop_once(signum, frame):
+    """The first stopping signal of an item raises KeyboardInterrupt; the next are ignored (the
+    terminal's Ctrl-C, then the parent's, would strike inside the handling of the first)."""
+    for stopping in STOPPING:
+        signal.signal(stopping, interrupt.ignore)
+    raise KeyboardInterrupt
 
 
 def _die_with_parent(parent):
@@ -135,11 +153,11 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
         # A worker starts in the submit: with SIGINT blocked, which it inherits, so that a
         # Ctrl-C while it starts up is no traceback of its own (as multiprocessing's resource
         # tracker does); it is delivered here once unblocked.
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
         try:
             holding[pool.submit(_interruptible, function, item)] = pool, item
         finally:
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
 
     try:
         for _ in range(min(jobs, len(items))):

@@ -14,9 +14,9 @@ Where no Ctrl-C can arrive (another thread than the main one, SIGINT ignored or 
 the system's default), the kernel is simply called.
 """
 
+import contextlib
 import signal
 import threading
-import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -87,7 +87,9 @@ def call(kernel: Dispatcher, *args: Any, argtypes: Sequence[types.Type] | None =
             pass
     except BaseException:  # KeyboardInterrupt, or whatever else a signal handler raised
         stop[0] = 1
-        if not _waited(done, GRACE_S):
+        with deaf():
+            stopped = done.wait(GRACE_S)
+        if not stopped:
             raise KeyboardInterrupt(f"but {culprit} did not stop within {GRACE_S:g} s "
                                     "(a loop that never ends?) and is left running") from None
         raise
@@ -97,12 +99,22 @@ def call(kernel: Dispatcher, *args: Any, argtypes: Sequence[types.Type] | None =
     return result
 
 
-def _waited(done: threading.Event, timeout: float) -> bool:
-    """Wait up to ``timeout`` s for ``done`` to be set, Ctrl-C again being ignored; True if it was."""
-    deadline = time.monotonic() + timeout
-    while not done.is_set() and time.monotonic() < deadline:
-        try:
-            done.wait(min(_WAKE_S, max(deadline - time.monotonic(), 0.0)))
-        except KeyboardInterrupt:  # already stopping
-            pass
-    return done.is_set()
+def ignore(signum: int, frame: Any) -> None:
+    """A signal handler that does nothing: unlike SIG_IGN, which Python meets with "OSError: Signal
+    ignored due to race condition" if the signal arrived just before the handler changed."""
+
+
+@contextlib.contextmanager
+def deaf():
+    """Ctrl-C and SIGTERM ignored within: once stopping, a second signal (the terminal's Ctrl-C and
+    a sweep's forwarded one, SLURM's SIGTERM to every process) would strike inside the lock of a
+    wait and leave it broken ("release unlocked lock")."""
+    previous = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    previous = {signum: handler for signum, handler in previous.items() if handler is not None}  # None: not Python's
+    for signum in previous:
+        signal.signal(signum, ignore)
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)

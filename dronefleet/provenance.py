@@ -17,10 +17,12 @@ from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from . import __version__
-
 if TYPE_CHECKING:
     import pyarrow
+
+#: The package's version, the one place it is written (``dronefleet.__version__``, pyproject.toml
+#: reads it): here, in the shared infrastructure, so that stamping a file needs nothing above it.
+__version__ = "0.1.0"
 
 #: Schema metadata key of :func:`provenance` (JSON); ``dronefleet.version`` holds the version alone.
 KEY = b"dronefleet.provenance"

@@ -227,3 +227,21 @@ def read_config(path: str | os.PathLike, build: Callable[[dict[str, Any]], Any],
         return build(document)
     except ConfigError as error:
         raise DataError(f"{kind} {str(path)!r} holds a config that is not valid: {error}", error.keys) from None
+
+
+def chosen_trial(run_dir: Path, trials: range, trial: int | None) -> int:
+    """``trial`` (None: the first of ``trials``, the trials its config says the run in ``run_dir``
+    holds); ConfigError (one line) if the config does not hold it or the run's ``summary.parquet``
+    has no row of it (a table whose rows are not its config's)."""
+    from .config import ConfigError
+    from .datafiles import DataError, read_parquet
+
+    chosen = trials.start if trial is None else trial
+    if chosen not in trials:
+        raise ConfigError(f"--trial {chosen}: RUN_DIR {str(run_dir)!r} holds trials {trials.start} to "
+                          f"{trials.stop - 1}")
+    summary = run_dir / "summary.parquet"
+    if chosen not in read_parquet(summary, {"trial": pa.int64()}).column("trial").to_pylist():
+        raise DataError(f"table {str(summary)!r} has no row of trial {chosen}, one of the trials "
+                        f"{trials.start} to {trials.stop - 1} its config says the run holds")
+    return chosen

@@ -87,10 +87,12 @@ def page(data: dict[str, Any], scene_script: str) -> str:
     return re.sub(r"/\*(?:DATA|SCENE)\*/", lambda match: parts.pop(match[0], match[0]), template)
 
 
-def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
-    """Write the replay page of the run in ``run_dir`` to ``out`` (atomically); return ``out``.
+def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None = None) -> Path:
+    """Write the replay page of the run in ``run_dir`` (of its trial ``trial`` if its runs hold
+    several; None: the first) to ``out`` (atomically); return ``out``.
 
-    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder or holds a
+    Raises ConfigError (one line) if ``run_dir`` is not a complete run folder, does not hold
+    ``trial``, would make a page too large, or holds a
     table that is another run's, cannot be read or holds a value the page cannot draw (a
     DataError naming the file and column), or if ``out`` cannot be written (a folder, a special
     file such as a named pipe or a device, a missing or read-only parent, a file in a run folder
@@ -107,10 +109,10 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike) -> Path:
     # or pass for that run's page
     own_page = out.name == REPLAY_FILE and out.parent.resolve() == run_dir.resolve()
     if not own_page and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
-                            for s in scenarios.SCENARIOS.values()):
+                            for s in scenarios.registered().values()):
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
     # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it
-    html = page(scenario.replay_data(run_dir), scenario.replay_script)
+    html = page(scenario.replay_data(run_dir, trial), scenario.replay_script)
     with writing(out):
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))

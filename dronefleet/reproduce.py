@@ -1,10 +1,13 @@
-"""Reproduce the study's figures (Figures 16-20: docs/delivery-experiments.md; 9-12: docs/replenishment-model.md).
+"""Reproduce the studies' figures (Figures 16-20: docs/delivery-experiments.md; 9-12: docs/replenishment-model.md).
 
 ``dronefleet reproduce FIGURE... [--quick] [--jobs J] [--out DIR | --update-results] [--redraw | --check]
-[--theta N]``, FIGURE one or more of fig09..fig12, fig16..fig20, or ``all``. Figures 9-12 (energy
-replenishment) run their grid ``configs/sweeps/replenishment-figNN.toml`` whole (seconds) into
-``runs.parquet`` (one row per trial) and ``bounds.parquet``: see :mod:`dronefleet.replenishment.study`. Each delivery
-figure needs one or more sweeps of ``configs/sweeps/``:
+[--theta N]``, FIGURE one or more of fig09..fig12, fig16..fig20 (and any other study's: ``dronefleet
+reproduce --list``), or ``all``. A study is the delivery deliverable's, here (:data:`DELIVERABLE`),
+or the ``study()`` hook of a registered scenario (:class:`dronefleet.contract.FigureStudy`), run
+with a :class:`Study` as its :class:`~dronefleet.contract.StudyContext`: see :func:`studies`.
+Figures 9-12 (energy replenishment) run their grid ``configs/sweeps/replenishment-figNN.toml``
+whole (seconds) into ``runs.parquet`` (one row per trial) and ``bounds.parquet``: see
+:mod:`dronefleet.replenishment.study`. Each delivery figure needs one or more sweeps of ``configs/sweeps/``:
 
 ==========  ==================================================================
 sweep       runs (``--quick``: seeds 0-1, 2 weeks)
@@ -39,13 +42,11 @@ command lists what differs (exit 1). It only reads: the committed ``results/`` u
 """
 
 import argparse
-import functools
 import logging
 import os
-import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +55,9 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from .config import shipped_config
+from . import executors, scenarios
+from .config import ConfigError, shipped_config
+from .contract import FigureStudy
 from .datafiles import DataError, checked_column, parquet_schema, read_parquet
 from .delivery import analysis
 from .outputs import probe_folders, writing
@@ -63,18 +66,17 @@ from .provenance import stamp
 from .records import write_atomic
 from .sweeps import Progress, Run, Sweep, SweepError, available_cpus, dataset, load_sweep, rows, run_sweep
 
-log = logging.getLogger("dronefleet.reproduce")  # not __name__: it also runs as __main__
+log = logging.getLogger(__name__)
 
 #: Where reproduce writes unless told otherwise: beside, never over, the committed results.
 DEFAULT_OUT = Path("dronefleet-results")
 #: The committed figures and tables: only --update-results writes there, --check reads them.
 COMMITTED_RESULTS = Path("results")
-REPLENISHMENT_FIGURES = ("fig09", "fig10", "fig11", "fig12")
+REPLENISHMENT_FIGURES = replenishment.FIGURES
 DELIVERY_FIGURES = ("fig16", "fig17", "fig18", "fig19", "fig20")
-FIGURES = (*REPLENISHMENT_FIGURES, *DELIVERY_FIGURES)
-#: The sweeps each figure reads (the replenishment figures run their own grid).
+#: The sweeps each delivery figure reads.
 NEEDS = {"fig16": ("rules",), "fig17": ("rules",), "fig18": ("rules",), "fig19": ("rules", "thresholds"),
-         "fig20": ("rules", "reservations"), **dict.fromkeys(REPLENISHMENT_FIGURES, ())}
+         "fig20": ("rules", "reservations")}
 #: What --quick changes in every sweep: few seeds, a short horizon.
 QUICK_SEEDS = (0, 1)
 QUICK_CHANGES = {"horizon_weeks": 2.0}
@@ -95,13 +97,14 @@ CHECK_RUNS = {
               ("rules", "rule=least_confident,tau_minutes=30.0,seed=1")),
     "fig20": (("reservations", "rule=reservation,seed=0"),
               ("reservations", "rule=least_confident,seed=4")),
-    # Figures 9-12: two configurations each (their column values), every trial re-run.
+    # Figures 9-12 (their study's): two configurations each (their column values), every trial re-run.
     **replenishment.CHECK_CONFIGS,
 }
 
 
 class Study:
-    """The study's sweeps under one results root: loaded (validated) once, run on demand."""
+    """The studies' sweeps under one results root: loaded (validated) once, run on demand; the
+    :class:`~dronefleet.contract.StudyContext` of every study."""
 
     def __init__(self, results: str | os.PathLike, quick: bool = False, jobs: int | None = None,
                  log: Callable[[str], object] = log.info, theta: float | None = None) -> None:
@@ -189,6 +192,19 @@ class Study:
             path.mkdir(parents=True, exist_ok=True)
         return path
 
+    def load_sweep(self, path: Path, changes: Mapping[str, Any] | None = None) -> Sweep:
+        return load_sweep(path, changes=changes)
+
+    def map(self, function: Callable, items: Iterable) -> executors.Outcomes:
+        """``function`` over ``items`` on :attr:`jobs` local processes (:func:`dronefleet.executors.local`)."""
+        return executors.local(function, items, self.jobs)
+
+    def write_table(self, frame: pd.DataFrame, path: Path) -> Path:
+        return _write_parquet(frame, path)
+
+    def read_table(self, figure: str, name: str) -> pd.DataFrame:
+        return _read(self, figure, name)
+
 
 def _write_parquet(frame, path):
     table = stamp(pa.Table.from_pandas(frame, preserve_index=False))
@@ -246,32 +262,26 @@ KINDS = {
     "text": (_is_text, _any, "text", False),
     "integer": (pa.types.is_integer, _any, "an integer", False),
     "count": (pa.types.is_integer, lambda x: x >= 0, "an integer >= 0", False),
+    # a week of a run: runs are at most 1000 weeks long (delivery's horizon_weeks)
+    "week": (pa.types.is_integer, lambda x: (x >= 0) & (x <= 1000), "an integer in [0, 1000]", False),
     "key": (_is_number, np.isfinite, "a finite number", False),
     "number": (_is_number, lambda x: ~np.isinf(x), "a number, NaN or null (not infinite)", True),
     "flag": (pa.types.is_boolean, _any, "true or false", False),
 }
-_REPLENISHMENT_CONFIG = {**dict.fromkeys(replenishment.CONFIG_COLUMNS, "key"), "strategy": "text",
-                         "n_workers": "integer", "n_chargers": "integer", "ticks": "integer"}
-#: The columns each figure table must hold, and their kinds (:data:`KINDS`); other columns are kept
-#: if they are not nested. ``runs`` of the delivery figures is read by --check only.
+#: The columns each delivery figure table must hold, and their kinds (:data:`KINDS`); other columns
+#: are kept if they are not nested. ``runs`` is read by --check only. Other studies: their TABLE_COLUMNS.
 TABLE_COLUMNS = {
     "outcomes": {"rule": "text", "tau_minutes": "key", "delivered": "count", "median_delivery_time_s": "number",
                  "aborted_pct": "number"},
-    "backlog": {"rule": "text", "tau_minutes": "key", "arrival_week": "integer", "backlog_age_s": "number"},
-    "accuracy": {"rule": "text", "week": "integer", "mean_accuracy": "number", "ci_low": "number",
+    "backlog": {"rule": "text", "tau_minutes": "key", "arrival_week": "week", "backlog_age_s": "number"},
+    "accuracy": {"rule": "text", "week": "week", "mean_accuracy": "number", "ci_low": "number",
                  "ci_high": "number", "confidence": "key"},
     "winner_soh": {"soc": "key", "distance_m": "key", "mass_kg": "key", "mean_winner_soh": "number"},
     "thresholds": {"theta": "key", "runs": "count", "delivered_mean": "number", "delivered_median": "number",
                    "median_delivery_time_s": "number", "aborted_pct_mean": "number", "pending_mean": "number",
                    "backlog_age_s_mean": "number", "best": "flag"},
-    "pending": {"rule": "text", "seed": "integer", "arrival_week": "integer", "pending": "count"},
+    "pending": {"rule": "text", "seed": "integer", "arrival_week": "week", "pending": "count"},
     "runs": {"sweep": "text", "run": "text"},
-}
-#: The replenishment figures' tables (Figures 9-12).
-REPLENISHMENT_TABLE_COLUMNS = {
-    "runs": {**_REPLENISHMENT_CONFIG, "trial": "count", "seed": "integer",
-             **dict.fromkeys(replenishment.METRIC_COLUMNS, "number")},
-    "bounds": {**_REPLENISHMENT_CONFIG, "bound_work": "number", "bound_efficiency": "number", "bound_duty": "number"},
 }
 
 
@@ -283,7 +293,7 @@ def _read_parquet(path, figure, name):
     """The table ``name`` of ``figure`` at ``path``, every column of :data:`TABLE_COLUMNS` checked
     value by value; a file that is not parquet (corrupt, cut short), lacks a column or holds a value
     the figure cannot use is one line naming the file and the column."""
-    columns = (REPLENISHMENT_TABLE_COLUMNS if figure in REPLENISHMENT_FIGURES else TABLE_COLUMNS)[name]
+    columns = owner(figure).TABLE_COLUMNS[name]
     again = f"run dronefleet reproduce {figure} without --check or --redraw to write it again"
     try:
         schema = parquet_schema(path)
@@ -402,10 +412,79 @@ def draw_fig20(study: Study) -> list[Path]:
     return figures.pending_bars(_read(study, "fig20", "pending"), study.root / "fig20" / "fig20")
 
 
-TIDY = {"fig16": tidy_fig16, "fig17": tidy_fig17, "fig18": tidy_fig18, "fig19": tidy_fig19, "fig20": tidy_fig20,
-        **{figure: functools.partial(replenishment.tidy, figure=figure) for figure in REPLENISHMENT_FIGURES}}
-DRAW = {"fig16": draw_fig16, "fig17": draw_fig17, "fig18": draw_fig18, "fig19": draw_fig19, "fig20": draw_fig20,
-        **{figure: functools.partial(replenishment.draw, figure=figure) for figure in REPLENISHMENT_FIGURES}}
+TIDY = {"fig16": tidy_fig16, "fig17": tidy_fig17, "fig18": tidy_fig18, "fig19": tidy_fig19, "fig20": tidy_fig20}
+DRAW = {"fig16": draw_fig16, "fig17": draw_fig17, "fig18": draw_fig18, "fig19": draw_fig19, "fig20": draw_fig20}
+
+
+class _Deliverable:
+    """The delivery study (OpenSwarm D4.4, Figures 16-20): here, not in its scenario package, as it
+    runs over the sweeps (:class:`Study`), which sit above the scenarios."""
+
+    TITLE = "UAV parcel delivery: OpenSwarm deliverable D4.4, Figures 16-20 (docs/delivery-experiments.md)"
+    FIGURES = DELIVERY_FIGURES
+    QUICK = f"seeds {QUICK_SEEDS[0]}-{QUICK_SEEDS[-1]} and {QUICK_CHANGES['horizon_weeks']:g} weeks"
+    TABLE_COLUMNS = TABLE_COLUMNS
+
+    def run_together(self, study: Study, figures: list[str]) -> None:
+        """Nothing: figures that share a sweep share its runs through the results root."""
+
+    def tidy(self, study: Study, figure: str) -> None:
+        for name in NEEDS[figure]:
+            study.ensure(name)
+        TIDY[figure](study)
+
+    def draw(self, study: Study, figure: str) -> list[Path]:
+        return DRAW[figure](study)
+
+    def check(self, study: Study, figure: str) -> list[str]:
+        return _check_delivery(study, figure)
+
+
+#: The delivery deliverable's study.
+DELIVERABLE = _Deliverable()
+
+
+def _studies(registry: Mapping[str, scenarios.Scenario]) -> dict[str, FigureStudy]:
+    """The studies of the scenarios of ``registry`` by name: delivery's is :data:`DELIVERABLE`, any
+    other's its ``study()`` hook, if it has one."""
+    found = {}
+    for name, scenario in registry.items():
+        study = DELIVERABLE if name == "delivery" else scenario.study
+        if study is not None:
+            found[name] = study
+    return found
+
+
+def studies() -> dict[str, FigureStudy]:
+    """Every study by its scenario's name, of every registered scenario (built-in, then installed).
+    ConfigError if two name one figure."""
+    found = _studies(scenarios.registered())
+    owners = {}
+    for name, study in found.items():
+        for figure in study.FIGURES:
+            if figure in owners or figure == "all":
+                raise ConfigError(f"scenario {name!r} names its figure {figure!r}, which "
+                                  f"{'is the word for every figure' if figure == 'all' else f'{owners[figure]!r} has'}"
+                                  ": its study's figures need other names")
+            owners[figure] = name
+    return found
+
+
+def all_figures() -> tuple[str, ...]:
+    """Every figure of every study (:func:`studies`), study by study."""
+    return tuple(figure for study in studies().values() for figure in study.FIGURES)
+
+
+def owner(figure: str) -> FigureStudy:
+    """The study that draws ``figure``; ConfigError listing the figures if none."""
+    for study in studies().values():
+        if figure in study.FIGURES:
+            return study
+    raise ConfigError(f"unknown figure {figure!r}; figures: {', '.join(all_figures())} (dronefleet reproduce --list)")
+
+
+#: The built-in studies' figures (a scenario installed from another package adds its own: :func:`all_figures`).
+FIGURES = tuple(figure for study in _studies(scenarios.SCENARIOS).values() for figure in study.FIGURES)
 
 
 def _check_theta(study, figures, redraw):
@@ -427,8 +506,8 @@ def _check_theta(study, figures, redraw):
 def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quick: bool = False,
               jobs: int | None = None, redraw: bool = False, log: Callable[[str], object] = log.info,
               theta: float | None = None) -> dict[str, list[Path]]:
-    """Reproduce ``figures`` (names of :data:`FIGURES`) under the results root ``out``: run
-    missing sweeps, tidy, draw.
+    """Reproduce ``figures`` (names of :func:`all_figures`) under the results root ``out``: run
+    what is missing, tidy, draw; each figure by its study (:func:`owner`).
 
     With ``redraw``, only draw, from the tidy parquet tables already written there. ``theta``
     (%) is Figure 19's threshold, one of its sweep's; None lets the study's criterion pick it.
@@ -443,18 +522,18 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
     study = Study(out, quick, jobs, log, theta)
     _check_theta(study, figures, redraw)
     probe_folders([study.root])  # a root under a file or not writable: one line, not a traceback at the first run
+    owners = {figure: owner(figure) for figure in figures}
     if not redraw:
-        replenishment.run_together(study, [figure for figure in figures if figure in REPLENISHMENT_FIGURES])
+        for each in dict.fromkeys(owners.values()):
+            each.run_together(study, [figure for figure in figures if owners[figure] is each])
     drawn = {}
     for figure in figures:
         start = time.perf_counter()
         log(f"{figure}{' (quick)' if quick else ''}:")
         if not redraw:
-            for name in NEEDS[figure]:
-                study.ensure(name)
-            TIDY[figure](study)
+            owners[figure].tidy(study, figure)
         with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
-            drawn[figure] = DRAW[figure](study)
+            drawn[figure] = owners[figure].draw(study, figure)
         log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
             f"({time.perf_counter() - start:.1f} s)")
     return drawn
@@ -467,7 +546,13 @@ def _same(a, b):
 
 def check(figure: str, results: str | os.PathLike = COMMITTED_RESULTS, quick: bool = False,
           log: Callable[[str], object] = log.info) -> list[str]:
-    """Re-run :data:`CHECK_RUNS` of ``figure`` and compare them with its ``runs.parquet``.
+    """Re-run a few runs of ``figure`` (:data:`CHECK_RUNS`) and compare them with its tables, by its
+    study's ``check``: the differences, one line each (empty if every value is equal)."""
+    return owner(figure).check(Study(results, quick, jobs=1, log=log), figure)
+
+
+def _check_delivery(study: Study, figure: str) -> list[str]:
+    """Re-run :data:`CHECK_RUNS` of the delivery ``figure`` and compare them with its ``runs.parquet``.
 
     The runs execute one after the other in this process, in a temporary results root
     (a warm-started run first re-runs the run whose fleet it starts from), so nothing under
@@ -477,9 +562,7 @@ def check(figure: str, results: str | os.PathLike = COMMITTED_RESULTS, quick: bo
     """
     from .delivery.fleet import seeded_path
 
-    study = Study(results, quick, jobs=1, log=log)
-    if figure in REPLENISHMENT_FIGURES:
-        return replenishment.check(study, figure)
+    quick, log = study.quick, study.log
     path = study.root / figure / "runs.parquet"
     if not path.exists():
         raise SweepError(f"{path} is missing: run dronefleet reproduce {figure}{' --quick' if quick else ''} "
@@ -514,9 +597,14 @@ def check(figure: str, results: str | os.PathLike = COMMITTED_RESULTS, quick: bo
     return differences
 
 
+def list_studies() -> str:
+    """``dronefleet reproduce --list``: every study, a line with its title, then its figures."""
+    return "\n".join(f"{name}: {study.TITLE}\n  {' '.join(study.FIGURES)}" for name, study in studies().items())
+
+
 def command(args: argparse.Namespace) -> int:
     """``dronefleet reproduce``."""
-    figures = FIGURES if "all" in args.figure else tuple(dict.fromkeys(args.figure))
+    figures = all_figures() if "all" in args.figure else tuple(dict.fromkeys(args.figure))
     named = " ".join(args.figure)
     # --check only reads, so it reads the committed results unless --out names another root.
     root = args.out or (COMMITTED_RESULTS if args.update_results or args.check else DEFAULT_OUT)
@@ -547,8 +635,3 @@ def command(args: argparse.Namespace) -> int:
              f"under {Path(root) / 'quick' if args.quick else root}")
     return 0
 
-
-if __name__ == "__main__":
-    from .cli import main
-
-    sys.exit(main(["reproduce", *sys.argv[1:]]))

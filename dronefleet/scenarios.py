@@ -1,115 +1,62 @@
-"""The scenarios dronefleet simulates, registered once by name, and the contract each implements.
+"""The scenarios dronefleet simulates: registered by name, built-in or installed, each meeting the contract.
 
-The CLI, the sweeps (:mod:`dronefleet.sweeps`: plan, run on local processes, a job array or
-Dask, status, collect) and ``reproduce`` work on this contract, never on a concrete scenario
-(``dronefleet run`` keeps a delivery-only path for fleet files and the progress bar). A config file names its scenario
-with a top-level ``scenario = "<name>"``; a file without the key is a delivery config, so
-every existing config, sweep and result keeps working.
+The contract is :class:`dronefleet.contract.ScenarioContract` (docs/scenario-contract.md):
+the schema and defaults, load/resolve_key/replace/value, simulate -> tables, table_schemas,
+format_summary, describe/label, FIGURES, and the optional hooks (format_bounds, replicates,
+replay_data, outdated, study). The CLI, the Python API, the sweeps, the replay page and
+``reproduce`` work on it through a :class:`Scenario` of this registry, never on a concrete
+scenario (``dronefleet run`` keeps a delivery-only path for fleet files and the progress bar).
 
-The contract: a scenario is a module defining
+A config file names its scenario with a top-level ``scenario = "<name>"``; a file without the
+key is a delivery config, so every existing config, sweep and result keeps working. The name
+selects a registered scenario, never code: no module path is ever imported from a file.
 
-``NAME``
-    its name in :data:`SCENARIOS`.
-``SCHEMA``, ``DEFAULTS``
-    ``{key: Field(section, unit, allowed, doc)}`` and ``{key: default}``: every config key,
-    its TOML section, unit, allowed values and meaning. A default's type (int, float, str;
-    tuple for a list of numbers) is the key's type: a sweep's partition columns take it.
-``load(path, overrides, seed) -> config``
-    the one validation entry point: the TOML file (or None for the defaults), ``--set``
-    strings ``"key=value"`` (``section.key`` or the bare key), a seed (None: the file's).
-    Any bad input raises :class:`dronefleet.config.ConfigError` (one line) before any work.
-    ``config.to_json()`` is its deterministic JSON (the default run folder hashes it),
-    ``config.to_dict()`` the same as sections of a config file; ``read_config(path)`` reads
-    it back from a table the scenario wrote.
-``resolve_key(key) -> name``
-    a key as ``--set`` and sweep files write it (``section.key`` or the bare key) -> the key's
-    name in ``SCHEMA``; ConfigError, listing the allowed keys, if there is none.
-``replace(config, changes) -> config``
-    a validated copy of ``config`` with ``changes`` (``{name: value}``) applied, the types as
-    strict as in ``load``; ConfigError naming the key and what is allowed otherwise.
-``value(config, name)``
-    the value of key ``name`` in ``config``.
-``SEED_KEY``, ``SEEDS_REQUIRED``
-    the key that a sweep's ``[sweep] seeds`` sets, one run per value (the last partition key
-    of a sweep's dataset), and whether a sweep must list them (if not, each configuration is
-    one run at its base config's value).
-``simulate(config) -> dict[str, pyarrow.Table]``
-    the run's tables, named as in ``TABLES`` (which holds ``"summary"``); written by
-    :func:`dronefleet.records.write_tables`, atomically, a run folder complete or absent,
-    each file with the config and :func:`dronefleet.provenance.stamp` in its metadata.
-``table_schemas() -> dict[str, pyarrow.Schema]``
-    the columns and types of each table ``simulate`` makes: a sweep refuses, as damaged, a
-    file it reads back that holds other ones.
-``format_summary(tables) -> str``
-    what ``dronefleet run`` prints, from the tables alone.
-``describe(config)``, ``label(config)``
-    a one-line description (the head of ``run``), a short tag for the default folder name.
-``FIGURES``
-    the names of its figures in ``dronefleet reproduce`` (possibly empty).
-``format_bounds(config) -> str`` (optional)
-    analytic bounds, for ``dronefleet bounds``; refusing parameters where none exists.
-``replicates(config) -> range`` (optional)
-    the replicates (trials) a run holds, if a run holds several: a sweep refuses seeds whose
-    runs would hold a replicate twice. Without it, a run is the one replicate its seed names.
-``replay_data(run_dir) -> dict`` (optional)
-    what the replay page (:mod:`dronefleet.replay`) shows of the complete run folder
-    ``run_dir`` (a :class:`pathlib.Path`), JSON-ready (``title`` and ``duration_s`` [s] at
-    least); the script ``replay.js`` beside the module draws it (it defines
-    ``makeScene(data)``, see ``dronefleet/replay.html``).
-``outdated(config, summary) -> bool`` (optional)
-    True if a done run (its ``summary`` file at the path ``summary``) must run again because
-    an input it read besides its config changed since (delivery: a saved fleet written again).
+Registered are:
 
-Where each scenario's pieces are:
-
-* ``delivery``: :mod:`dronefleet.delivery.scenario` over the subpackage (simulation,
-  engine, metrics, fleet, analysis, figures), with its schema in :mod:`dronefleet.delivery.config`.
-* ``replenishment``: :mod:`dronefleet.replenishment.scenario` over the subpackage
-  (params, simulate, kernel, bounds).
-* ``items``: :mod:`dronefleet.items.scenario` over the subpackage (params, simulate, kernel).
-
-Registering is one entry in :data:`SCENARIOS`: a plain dict, no import by string; each entry
-imports its module only when first used, so ``dronefleet --help`` stays cheap.
+* the built-ins, in :data:`SCENARIOS` (the one place they are listed), each imported only
+  when first used, so ``dronefleet --help`` stays cheap: ``delivery``
+  (:mod:`dronefleet.delivery.scenario`), ``replenishment`` (:mod:`dronefleet.replenishment.scenario`)
+  and ``items`` (:mod:`dronefleet.items.scenario`);
+* scenarios installed from other packages as entry points of the group ``dronefleet.scenarios``
+  (:data:`dronefleet.contract.ENTRY_POINT_GROUP`), ``name = "package.module"`` or
+  ``"package.module:object"``. One is loaded when a config, sweep or call names it (or
+  ``reproduce`` lists every study); one that fails to import, or does not meet the contract
+  (:func:`dronefleet.contract.contract_problems`), is refused in one line naming the entry
+  point, and so is one named like a built-in.
 """
 
 from __future__ import annotations
 
 import os
+import functools
+import importlib
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from importlib import resources
+from importlib.metadata import entry_points
 from pathlib import Path
-from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from .config import SCENARIO_KEY, ConfigError, _show, _suggest, read_toml
+from .contract import ENTRY_POINT_GROUP, FigureStudy, Field, contract_problems
+from .plugins import importing
 
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["Field", "Scenario", "SCENARIOS", "get", "scenario_of", "load"]
-
-
-@dataclass(frozen=True)
-class Field:
-    """Declaration of one config key: TOML section, unit, allowed values, meaning."""
-
-    section: str
-    unit: str
-    allowed: str
-    doc: str
+__all__ = ["Scenario", "SCENARIOS", "installed", "registered", "get", "scenario_of", "load"]
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """A registered scenario: its name and a function importing its contract module."""
+    """A registered scenario: its name and a function giving its contract object (a module, usually)."""
 
     name: str
-    entry: Callable[[], ModuleType]
+    entry: Callable[[], Any]
 
     @property
-    def module(self) -> ModuleType:
-        return self.entry()  # Python caches the import
+    def module(self) -> Any:
+        return self.entry()  # imported once: Python caches the import, entry points are cached here
 
     @property
     def tables(self) -> tuple[str, ...]:
@@ -179,38 +126,64 @@ class Scenario:
     def format_bounds(self) -> Callable | None:
         return getattr(self.module, "format_bounds", None)
 
-    def replay_data(self, run_dir: Path) -> dict[str, Any]:
-        """The replay page's data of the run folder ``run_dir``; ConfigError if the scenario has no replay."""
+    def _replay_data(self) -> Callable[..., dict[str, Any]]:
         replay_data = getattr(self.module, "replay_data", None)
         if replay_data is None:
-            having = [s.name for s in SCENARIOS.values() if hasattr(s.module, "replay_data")]
+            having = [s.name for s in registered().values() if hasattr(s.module, "replay_data")]
             raise ConfigError(f"scenario {self.name!r} has no replay page; scenarios with one: {', '.join(having)}")
-        return replay_data(run_dir)
+        return replay_data
+
+    def replay_data(self, run_dir: Path, trial: int | None = None) -> dict[str, Any]:
+        """The replay page's data of the run folder ``run_dir`` (of its trial ``trial``; None: its
+        first); ConfigError if the scenario has no replay or its runs no trials to choose."""
+        replay_data = self._replay_data()
+        if trial is None:
+            return replay_data(run_dir)
+        if not hasattr(self.module, "replicates"):
+            raise ConfigError(f"--trial {trial}: a {self.name} run is one replicate, it has no trials to choose")
+        return replay_data(run_dir, trial)
+
+    def check_replayable(self, config: Any) -> None:
+        """ConfigError (one line) if the replay page of a run of ``config`` would be refused."""
+        self._replay_data()
+        check = getattr(self.module, "check_replayable", None)
+        if check is not None:
+            check(config)
 
     @property
     def replay_script(self) -> str:
-        """The JavaScript that draws the scenario's replay page (``replay.js`` beside its module)."""
-        return resources.files(self.module.__package__).joinpath("replay.js").read_text(encoding="utf-8")
+        """The JavaScript that draws the scenario's replay page (``replay.js`` beside the module of its
+        ``replay_data``)."""
+        package = importlib.import_module(self.module.replay_data.__module__).__package__
+        return resources.files(package).joinpath("replay.js").read_text(encoding="utf-8")
+
+    @property
+    def study(self) -> FigureStudy | None:
+        """Its figures in ``dronefleet reproduce`` (the optional ``study`` hook), or None."""
+        study = getattr(self.module, "study", None)
+        return None if study is None else study()
 
 
-def _delivery() -> ModuleType:
+def _delivery() -> Any:
     from .delivery import scenario
 
     return scenario
 
 
-def _replenishment() -> ModuleType:
+def _replenishment() -> Any:
     from .replenishment import scenario
 
     return scenario
 
 
-def _items() -> ModuleType:
+def _items() -> Any:
     from .items import scenario
 
     return scenario
 
 
+
+#: The built-in scenarios, the one place they are registered.
 SCENARIOS: dict[str, Scenario] = {
     "delivery": Scenario("delivery", _delivery),
     "replenishment": Scenario("replenishment", _replenishment),
@@ -218,13 +191,56 @@ SCENARIOS: dict[str, Scenario] = {
 }
 
 
+@functools.cache  # successes only: a refused entry point raises, and is tried again next time
+def _load_entry_point(name: str) -> Any:
+    """The scenario object of the installed entry point ``name``, checked against the contract."""
+    entry_point = next(iter(entry_points(group=ENTRY_POINT_GROUP, name=name)))
+    where = f"the {ENTRY_POINT_GROUP} entry point {name!r} ({entry_point.value})"
+    try:
+        with importing(entry_point.module, f"scenario {name!r}"):
+            scenario = entry_point.load()
+    except Exception as error:  # the package's own error, whatever it is: the user must see it
+        raise ConfigError(f"{where} fails to load: {type(error).__name__}: {error}".splitlines()[0]) from None
+    problems = contract_problems(scenario)
+    if not problems and scenario.NAME != name:
+        problems = [f"its NAME is {scenario.NAME!r}"]
+    if problems:
+        raise ConfigError(f"{where} does not meet the scenario contract (docs/scenario-contract.md): "
+                          f"{'; '.join(problems)}")
+    return scenario
+
+
+def installed() -> dict[str, Scenario]:
+    """The scenarios installed as entry points of :data:`~dronefleet.contract.ENTRY_POINT_GROUP`, by name
+    (read from the packages' metadata; nothing is imported until one is used). ConfigError if one is
+    named like a built-in: it would never run, so it is refused rather than silently shadowed."""
+    found = {}
+    for entry_point in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+        if entry_point.name in SCENARIOS:
+            raise ConfigError(f"the {ENTRY_POINT_GROUP} entry point {entry_point.name!r} ({entry_point.value}) "
+                              f"is named like the built-in scenario: rename it in its package's pyproject.toml, "
+                              f"or uninstall it")
+        found[entry_point.name] = Scenario(entry_point.name, functools.partial(_load_entry_point, entry_point.name))
+    return found
+
+
+def registered() -> dict[str, Scenario]:
+    """Every registered scenario by name: the built-ins, then the installed ones (:func:`installed`)."""
+    return {**SCENARIOS, **installed()}
+
+
 def get(name: object, where: str = "") -> Scenario:
-    """The scenario registered as ``name``; ConfigError listing the registered ones if none."""
+    """The scenario registered as ``name``, its contract checked if installed; ConfigError listing the
+    registered ones if none."""
     if isinstance(name, str) and name in SCENARIOS:
         return SCENARIOS[name]
-    suggestion = _suggest(name, SCENARIOS) if isinstance(name, str) else ""
+    every = registered()
+    if isinstance(name, str) and name in every:
+        _load_entry_point(name)  # refused now, before any work, if it fails to load or breaks the contract
+        return every[name]
+    suggestion = _suggest(name, every) if isinstance(name, str) else ""
     raise ConfigError(f"{where}unknown scenario {_show(name)}{suggestion}; "
-                      f"registered scenarios: {', '.join(SCENARIOS)}", [SCENARIO_KEY])
+                      f"registered scenarios: {', '.join(every)}", [SCENARIO_KEY])
 
 
 def scenario_of(path: str | os.PathLike | None) -> Scenario:

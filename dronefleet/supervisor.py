@@ -23,7 +23,7 @@ import numpy as np
 import yaml
 from .jit import njit
 
-from .config import ConfigError
+from .config import ConfigError, brief
 
 BUILTIN_CONTROLLER = Path(__file__).parent / "data" / "uav-delivery-controller.yaml"
 
@@ -204,9 +204,9 @@ def _read_yaml(path):
         if problem is None:
             return yaml.load(text, Loader=_Loader)
     except yaml.YAMLError as exc:
-        raise _error(path, f"not valid YAML: {_one_line(exc)}") from None
+        raise _error(path, f"not valid YAML: {brief(exc)}") from None
     except ValueError as exc:  # a value YAML reads but Python refuses (an integer of too many digits)
-        raise _error(path, f"not valid YAML: {_one_line(exc)}") from None
+        raise _error(path, f"not valid YAML: {brief(exc)}") from None
     raise _error(path, problem)
 
 
@@ -225,12 +225,6 @@ def _structure_problem(events):
         elif isinstance(event, yaml.CollectionEndEvent):
             depth -= 1
     return None
-
-
-def _one_line(exc):
-    """An exception's message on one line, cut to 200 characters."""
-    text = " ".join(str(exc).split())
-    return text if len(text) <= 200 else text[:197] + "..."
 
 
 def _is_int(value):

@@ -109,7 +109,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from . import console, scenarios
-from .config import SCENARIO_KEY, ConfigError, _show, check_depth, read_toml
+from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, one_line, read_toml
 from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
@@ -143,10 +143,6 @@ _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
 _LABEL = r"[A-Za-z0-9](?:[A-Za-z0-9-]{0,61}[A-Za-z0-9])?"   # of a host name: 1-63 characters
 _SCHEDULER = re.compile(rf"(?:(?:tcp|tls|ucx|ws|wss)://)?(?P<host>{_LABEL}(?:\.{_LABEL})*|\[[0-9A-Fa-f:.]+\])"
                         r":(?P<port>[0-9]{1,5})")
-
-
-class SweepError(ConfigError):
-    """A sweep file, task or results directory that cannot be used; the message says why."""
 
 
 @dataclass(frozen=True)
@@ -533,7 +529,8 @@ def _report(message: str) -> None:
 
 
 def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
-    """Write ``_failed/<run id>.json`` (error, traceback, config) for ``run``; return ``error``.
+    """Write ``_failed/<run id>.json`` (error, traceback, config) for ``run``; return the error's
+    first line, as a terminal may show it.
 
     A record that cannot be written (``_failed`` unwritable, disk full) is reported on
     stderr, one line, and the sweep goes on: the run is not done either way, so ``status``
@@ -548,8 +545,13 @@ def _record_failure(run: Run, out: Path, error: str, trace: str) -> str:
         write_atomic(failure, lambda tmp: tmp.write_text(json.dumps(record, indent=2) + "\n"))
     except OSError as problem:
         _report(f"cannot write the failure record {failure} of run {run.partition} "
-                f"({problem.strerror or problem}); its error: {error.splitlines()[0] if error else error}")
-    return error
+                f"({problem.strerror or problem}); its error: {_first_line(error)}")
+    return _first_line(error)
+
+
+def _first_line(error: str) -> str:
+    """The first line of a recorded error (a plugin's may hold many, or escape sequences), shown as text."""
+    return one_line((error.splitlines() or [""])[0])[:500]
 
 
 def _config_difference(scenario: Scenario, a, b) -> str:
@@ -686,12 +688,18 @@ def _layout_keys(record: Path, out: Path) -> tuple[str, ...]:
 
 
 def check_layout(sweep: Sweep, out: Path) -> None:
-    """Refuse a sweep whose partition keys differ from those of the dataset already in ``out``.
+    """Refuse a sweep whose partition keys differ from those of the dataset already in ``out``, or
+    whose dataset has something else than a folder where a table's files go.
 
     The grid decides the layout: a sweep of the same name with a grid key moved to [set]
     would write a second layout beside the first, and readers of the folder would then see
     runs twice (DuckDB refuses it: "Hive partition mismatch").
     """
+    for table in sweep.scenario.tables:  # every run of the table would fail at it: said once, before any
+        folder = out / table
+        if os.path.lexists(folder) and not folder.is_dir():
+            raise SweepError(f"the dataset {out} is damaged: {str(folder)!r}, the folder of its {table} files, "
+                             "is not a folder: move or remove it")
     keys = sweep.runs[0].keys
     found = _found_layout(out, sweep.scenario.tables)
     if found is not None and found != keys:
@@ -1157,7 +1165,7 @@ def _recorded_error(path: Path) -> str:
     error = record.get("error") if isinstance(record, dict) else None
     if not isinstance(error, str):
         return f"(the record {path.name} cannot be read: it holds no \"error\" text)"
-    return (error.splitlines() or [""])[0][:500]
+    return _first_line(error)
 
 
 def status_command(args: argparse.Namespace) -> int:

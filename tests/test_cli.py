@@ -157,6 +157,15 @@ def test_usage_errors_are_one_line(capsys):
     _refused(capsys, ["reproduce", "fig99"], "invalid choice: 'fig99'")
 
 
+@pytest.mark.parametrize("argv", [["run", "--out", ""], ["run", "--fleet", ""], ["run", "--save-fleet", ""],
+                                  ["replay", "run", "--out", ""], ["sweep", "status", "s.toml", "--results", ""],
+                                  ["sweep", "plan", "s.toml", "--out", ""], ["reproduce", "fig20", "--out", ""]])
+def test_an_empty_path_is_refused_not_taken_as_the_default_or_the_current_folder(argv, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    _refused(capsys, argv, f"argument {argv[-2]}: expected a path, got an empty one ''")
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_config_that_is_a_pipe_is_refused_not_waited_on(tmp_path, capsys):
     import os
     fifo = tmp_path / "c.toml"

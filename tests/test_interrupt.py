@@ -94,14 +94,19 @@ def _wait_until(process, ready, limit_s=600):
         time.sleep(0.05)
 
 
-def _interrupted(process, group=False):
-    """Send Ctrl-C (to the process group: as the terminal does); its stderr lines once it ended."""
+#: The exit code each stopping signal ends a command with: as a shell reports a process it killed.
+EXIT_CODES = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+def _interrupted(process, group=False, signum=signal.SIGINT):
+    """Send Ctrl-C, or ``signum`` (to the process group: as the terminal does, and SLURM at a job's
+    time limit); its stderr lines once it ended."""
     if group:
-        os.killpg(process.pid, signal.SIGINT)
+        os.killpg(process.pid, signum)
     else:
-        process.send_signal(signal.SIGINT)
+        process.send_signal(signum)
     _, err = process.communicate(timeout=60)  # a hang, not a measure
-    assert process.returncode == 130, err
+    assert process.returncode == EXIT_CODES[signum], err
     assert "Traceback" not in err and "Error" not in err, err
     return err.splitlines()
 
@@ -111,8 +116,11 @@ def _leftovers(folder):
     return [p for p in Path(folder).rglob(".*") if p.name.endswith((".tmp", ".old"))]
 
 
+RUN_ARGS = ["run", str(CONFIGS / "replenishment.toml"), "--set", "trials=2000"]
+
+
 @pytest.mark.parametrize("args", [
-    pytest.param(["run", str(CONFIGS / "replenishment.toml"), "--set", "trials=2000"], id="replenishment"),
+    pytest.param(RUN_ARGS, id="replenishment"),
     pytest.param(["run", "--set", "horizon_weeks=90", "--set", "n_uavs=100"], id="delivery"),
     pytest.param(["run", str(CONFIGS / "items.toml"), "--set", "trials=70000"], id="items"),
 ])
@@ -120,6 +128,13 @@ def test_ctrl_c_in_a_compiled_kernel_is_a_clean_interruption(args, tmp_path):
     process = _start([*args, "--out", str(tmp_path / "out")], tmp_path)
     _wait_until(process, lambda: _kernel_ticks(process.pid) >= KERNEL_TICKS)
     assert _interrupted(process) == ["dronefleet: interrupted"]
+    assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_sigterm_in_a_compiled_kernel_stops_the_run_as_ctrl_c_does(tmp_path):
+    process = _start([*RUN_ARGS, "--out", str(tmp_path / "out")], tmp_path)
+    _wait_until(process, lambda: _kernel_ticks(process.pid) >= KERNEL_TICKS)
+    assert _interrupted(process, signum=signal.SIGTERM) == ["dronefleet: interrupted by SIGTERM"]
     assert sorted(os.listdir(tmp_path)) == []
 
 
@@ -156,15 +171,16 @@ ticks = [60, 50000000]
 """
 
 
-@pytest.mark.parametrize("group", [True, False], ids=["terminal", "parent-only"])
-def test_ctrl_c_of_a_sweep_keeps_the_runs_done_and_stops_its_workers(group, tmp_path):
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
+@pytest.mark.parametrize("group", [True, False], ids=["every-process", "parent-only"])
+def test_ctrl_c_of_a_sweep_keeps_the_runs_done_and_stops_its_workers(group, signum, tmp_path):
     # The first run (60 ticks) runs in the command's process, the second (years of ticks) in a
     # worker, which the terminal's Ctrl-C reaches too, but a `kill -INT` of the command does not.
     (tmp_path / "long.toml").write_text(SWEEP)
     results = tmp_path / "results"
     process = _start(["sweep", "run", "long.toml", "--results", str(results), "--jobs", "2"], tmp_path, group=True)
     _wait_until(process, lambda: any(_kernel_ticks(child) >= KERNEL_TICKS for child in _children(process.pid)))
-    lines = _interrupted(process, group=group)
+    lines = _interrupted(process, group=group, signum=signum)
     assert any("interrupted" in line for line in lines), lines
     summaries = sorted(p.relative_to(results / "long") for p in results.rglob("summary/**/*.parquet"))
     assert [p.parts[1] for p in summaries] == ["ticks=60"], summaries
@@ -201,3 +217,20 @@ def test_ctrl_c_while_the_command_loads_its_modules_is_interrupted(tmp_path):
                           capture_output=True, text=True, cwd=tmp_path, timeout=120)
     assert (done.returncode, done.stderr) == (130, "dronefleet: interrupted\n")
     assert not (tmp_path / "out").exists()
+
+
+ENDED = '''
+import os, signal, sys
+import dronefleet.__main__
+sys.argv = ["dronefleet", "run", "absent.toml"]  # refused: returns 2 at once
+code = dronefleet.__main__.main()
+os.kill(os.getpid(), signal.SIGINT)  # a Ctrl-C as the interpreter exits, its work done
+print("exiting", flush=True)
+sys.exit(code)
+'''
+
+
+def test_ctrl_c_once_the_command_has_ended_does_not_undo_its_exit_code(tmp_path):
+    done = subprocess.run([sys.executable, "-c", ENDED], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and "absent.toml" in done.stderr, done.stderr
+    assert done.stdout == "exiting\n"

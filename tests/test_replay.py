@@ -21,7 +21,7 @@ from dronefleet.replenishment import Params, simulate
 from dronefleet.replenishment.kernel import BASE, TRANSFER, WORK, floor_colour
 from dronefleet.replenishment import replay as replay_module
 from dronefleet.replenishment.replay import AREAS
-from dronefleet.replenishment.replay import replay_data as replenishment_data
+from dronefleet.replenishment.scenario import replay_data as replenishment_data
 
 REPLENISHMENT = 'scenario = "replenishment"\n[run]\ntrials = 2\nfirst_trial = 3\nticks = 900\n'
 
@@ -259,6 +259,9 @@ TAMPERED_CONTENTS = [
     ("orders", first_set("order_id", 7), "column 'order_id' holds 7 at row 0; allowed: the row number"),
     ("orders", first_set("distance_m", -1.0), "column 'distance_m' holds -1.0 at row 0"),
     ("orders", without("distance_m"), "has no column 'distance_m'"),
+    ("orders", first_set("distance_m", 1e308), "column 'distance_m' holds 1e+308 at row 0; allowed: finite, in [0, "),
+    ("attempts", first_set("turn_s", 1e308), "column 'turn_s' holds 1e+308 at row 0; allowed: finite, in [0, "),
+    ("attempts", first_set("return_s", -1.0), "column 'return_s' holds -1.0 at row 0"),
     ("timeseries", first_set("unallocated", None), "column 'unallocated' holds null at row 0"),
     ("timeseries", first_set("t_s", float("-inf")), "column 't_s' holds -inf at row 0"),
 ]

@@ -1,6 +1,6 @@
 """Property-based tests of the replay loader: any damage to a run folder gives a page or one line.
 
-One short delivery run and one short replenishment run are made per module; every example
+One short delivery run, one short replenishment run and one short items run are made per module; every example
 damages a copy of one of them (a table cut short, overwritten with random bytes, its config
 metadata replaced by random or deeply nested JSON, a column dropped, retyped or given a hostile
 value) and writes its page with :func:`dronefleet.replay.write`: the result is a page, or a
@@ -27,17 +27,22 @@ SETTINGS = settings(max_examples=100, deadline=None, derandomize=True, database=
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 DELIVERY_TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 REPLENISHMENT_TABLES = ("summary", "timeseries")
+ITEMS_TABLES = ("summary", "robots")
+TABLES = {"delivery": DELIVERY_TABLES, "replenishment": REPLENISHMENT_TABLES, "items": ITEMS_TABLES}
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    """``{scenario: run folder}``: a 0.05-week delivery run of 3 UAVs, a 1-trial replenishment run."""
+    """``{scenario: run folder}``: a 0.05-week delivery run of 3 UAVs, a 1-trial replenishment run,
+    a 2-trial items run of 100 steps."""
     folder = tmp_path_factory.mktemp("runs")
     assert cli.main(["run", "--set", "horizon_weeks=0.05", "--set", "n_uavs=3", "--seed", "4",
                      "--out", str(folder / "delivery")]) == 0
     (folder / "replenishment.toml").write_text('scenario = "replenishment"\n[run]\ntrials = 1\nticks = 600\n')
     assert cli.main(["run", str(folder / "replenishment.toml"), "--out", str(folder / "replenishment")]) == 0
-    return {"delivery": folder / "delivery", "replenishment": folder / "replenishment"}
+    (folder / "items.toml").write_text('scenario = "items"\n[run]\ntrials = 2\nsteps = 100\n')
+    assert cli.main(["run", str(folder / "items.toml"), "--out", str(folder / "items")]) == 0
+    return {"delivery": folder / "delivery", "replenishment": folder / "replenishment", "items": folder / "items"}
 
 
 def page_or_one_line(run_dir):
@@ -60,8 +65,7 @@ def damaged(runs, scenario, damage):
         return result
 
 
-scenario_tables = st.sampled_from([("delivery", name) for name in DELIVERY_TABLES]
-                                  + [("replenishment", name) for name in REPLENISHMENT_TABLES])
+scenario_tables = st.sampled_from([(scenario, name) for scenario, tables in TABLES.items() for name in tables])
 
 
 @SETTINGS
@@ -90,9 +94,10 @@ def test_random_bytes_in_a_table_give_a_page_or_one_line(runs, where, junk, frac
 
 
 json_scalars = (st.none() | st.booleans() | st.integers(-2**70, 2**70) | st.floats(allow_nan=False)
-                | st.text(max_size=12) | st.sampled_from(["delivery", "replenishment", "evilmod:x", "<!--<script>"]))
+                | st.text(max_size=12) | st.sampled_from(["delivery", "replenishment", "items", "evilmod:x",
+                                                          "<!--<script>"]))
 keys = st.sampled_from(["scenario", "run", "orders", "fleet", "auction", "rule", "n_uavs", "horizon_weeks", "ticks",
-                        "trials"]) | st.text(max_size=6)
+                        "trials", "first_trial", "steps", "locations", "n_robots", "mode"]) | st.text(max_size=6)
 json_values = st.recursive(json_scalars, lambda inner: st.lists(inner, max_size=4)
                            | st.dictionaries(keys, inner, max_size=4), max_leaves=12)
 
@@ -114,10 +119,10 @@ def config_texts(draw):
 
 
 @SETTINGS
-@given(st.sampled_from(["delivery", "replenishment"]), config_texts(), keys, json_values, st.booleans())
+@given(st.sampled_from(list(TABLES)), config_texts(), keys, json_values, st.booleans())
 def test_any_config_metadata_gives_a_page_or_one_line(runs, scenario, text, key, value, every_table):
     def rewrite(run):
-        tables = DELIVERY_TABLES if scenario == "delivery" else REPLENISHMENT_TABLES
+        tables = TABLES[scenario]
         config = text
         if config is None:
             document = json.loads(pq.read_schema(run / "summary.parquet").metadata[CONFIG_KEY])
@@ -135,9 +140,9 @@ def test_any_config_metadata_gives_a_page_or_one_line(runs, scenario, text, key,
 
 cells = (st.none() | st.integers(-3, 3) | st.sampled_from([10**6, 2**15 - 1, 2**31 - 1]) | st.integers(-2**63, 2**63 - 1)
          | st.floats() | st.text(max_size=8) | st.sampled_from(["teleported", "lost"]) | st.booleans())
-#: Columns the page reads, drawn more often than the rest (any column may be drawn).
+#: Columns the pages read, drawn more often than the rest (any column may be drawn).
 READ = ["order_id", "uav", "outcome", "takeoff_s", "takeoff_soc", "turn_s", "return_s", "return_soc", "distance_m",
-        "arrival_s", "t_s", "unallocated"]
+        "arrival_s", "t_s", "unallocated", "trial"]
 
 
 @st.composite

@@ -78,6 +78,13 @@ REDRAWN = [
     ("fig17", "accuracy", lambda table: table.slice(0, 0), "holds no rows"),
     ("fig18", "winner_soh", lambda table: pa.concat_tables([table, table.slice(0, 1)]), "repeats soc, mass_kg, "
                                                                                         "distance_m = "),
+    ("fig20", "pending", set_first("arrival_week", 2**62), "column 'arrival_week' holds 4611686018427387904"),
+    ("fig16", "backlog", set_first("arrival_week", -5), "column 'arrival_week' holds -5 at row 0"),
+    ("fig17", "accuracy", set_first("week", 1001), "column 'week' holds 1001 at row 0"),
+    ("fig10", "runs", set_first("strategy", "evilmod:x"), "strategy = 'evilmod:x'"),
+    ("fig09", "runs", set_first("n_chargers", -3), "n_chargers = -3"),
+    ("fig09", "runs", set_first("n_chargers", 10**9), "n_chargers = 1000000000"),
+    ("fig12", "bounds", set_first("transfer_loss", 2.0), "transfer_loss = 2.0"),
 ]
 
 
@@ -123,7 +130,8 @@ def test_check_refuses_a_delivery_runs_table_it_cannot_compare_before_any_run(ch
     ("ticks", 10**8, "robot-ticks"),  # each trial allowed, all of them together days of running
     ("work_ratio", -1.0, "work_ratio"),
     ("charge_rate", float("nan"), "column 'charge_rate' holds nan at row 0"),
-    ("trial", 0, "first_trial = 0 is out of range"),
+    ("trial", range, "first_trial = 0 is out of range"),  # trials 0, 1, 2, ...: consecutive, but from 0
+    ("trial", 1, "holds the trials [1, 1, 1,"),  # each row trial 1: re-running them would be one trial many times
     ("n_workers", -6, "n_workers"),
 ])
 def test_check_refuses_a_replenishment_configuration_it_cannot_re_run_before_any_run(column, value, fragment, tmp_path,
@@ -135,6 +143,7 @@ def test_check_refuses_a_replenishment_configuration_it_cannot_re_run_before_any
 
     def change(table):  # every row: the configurations --check picks hold the value too
         index = table.schema.get_field_index(column)
-        return table.set_column(index, column, pa.array([value] * table.num_rows, table.schema.field(column).type))
+        values = value(table.num_rows) if callable(value) else [value] * table.num_rows
+        return table.set_column(index, column, pa.array(values, table.schema.field(column).type))
     tamper(path, change)
     refused(["reproduce", "fig09", "--check", "--out", str(tmp_path)], capsys, str(path), fragment)

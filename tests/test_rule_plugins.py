@@ -19,6 +19,7 @@ import dronefleet
 from dronefleet import cli
 from dronefleet.delivery import auction, simulation
 from dronefleet.delivery.auction import PLUGIN, RuleError, resolve_rule
+from dronefleet.config import ConfigError
 
 REPO = Path(dronefleet.__file__).resolve().parent.parent
 EXAMPLE = REPO / "examples" / "dronefleet-rule-fullest-battery"
@@ -125,6 +126,15 @@ def int_score(f, w_norm, soc, theta, rng):
 int_score.bids_on = "policy"
 
 
+@njit
+def out_of_bounds(f, w_norm, soc, theta, rng):
+    scores = np.zeros(2)  # allocates, as a rule may
+    return True, scores[int(soc) * 1000000 + 7]
+
+
+out_of_bounds.bids_on = "any"
+
+
 def __getattr__(name):
     if name == "unready":
         raise RuntimeError(f"{name} is not ready")
@@ -169,25 +179,45 @@ def rules_module(tmp_path, monkeypatch):
     ("broken_rule", ("is an entry point of dronefleet.winner_rules ({m}_missing:rule) that fails to load: "
                      "ModuleNotFoundError")),
     ("{m}:score_first", "returns Tuple(float64, bool), not (bids, score): a bool, then a float, in this order"),
-    ("exiting:rule", "names module 'exiting', which cannot be imported (ImportError: it calls sys.exit(3) when "
-                     "imported)"),
+    ("exiting:rule", "names module 'exiting', which cannot be imported (ImportError: it calls sys.exit(3))"),
+    ("exiting_quietly:rule", "names module 'exiting_quietly', which cannot be imported (ImportError: it calls "
+                             "sys.exit(0))"),
+    ("exiting_in_words:rule", "which cannot be imported (ImportError: it calls sys.exit('bye\\n\\x1b[31m red'))"),
+    ("exiting_on_lookup:rule", "names 'rule', which module 'exiting_on_lookup' fails to give (ImportError: it calls "
+                               "sys.exit(0))"),
+    ("garbled:rule", "names module 'garbled', which cannot be imported (ImportError: two lines \\x1b[2J of error)"),
 ])
 def test_a_bad_rule_is_refused_in_one_line(rule, fragment, rules_module, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(simulation, "simulate", lambda *a, **k: pytest.fail("the run was simulated"))
-    (tmp_path / "exiting.py").write_text("import sys\nsys.exit(3)\n")
+    for module, source in {"exiting": "import sys\nsys.exit(3)\n",
+                           "exiting_quietly": "import sys\nsys.exit(0)\n",
+                           "exiting_in_words": "raise SystemExit('bye\\n\\x1b[31m red')\n",
+                           "exiting_on_lookup": "def __getattr__(name):\n    raise SystemExit(0)\n",
+                           "garbled": "raise ImportError('two lines\\n\\x1b[2J of error')\n"}.items():
+        (tmp_path / f"{module}.py").write_text(source)
     rule, fragment = rule.format(m=rules_module), fragment.format(m=rules_module)
     code = cli.main(["run", "--set", f"rule={rule}", "--out", str(tmp_path / "out")])
     lines = capsys.readouterr().err.splitlines()
     assert code == 2
     assert len(lines) == 1 and lines[0].startswith(f"dronefleet: error: auction.rule = '{rule}' "), lines
-    assert fragment in lines[0]
+    assert fragment in lines[0] and lines[0].isprintable()
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("rule", ["exiting_quietly:rule", "exiting_on_lookup:rule"])
+def test_a_plugin_that_exits_is_a_config_error_of_the_api(rule, tmp_path, monkeypatch):
+    (tmp_path / "exiting_quietly.py").write_text("import sys\nsys.exit(0)\n")
+    (tmp_path / "exiting_on_lookup.py").write_text("def __getattr__(name):\n    raise SystemExit(0)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(ConfigError, match="it calls sys.exit"):
+        dronefleet.run(rule=rule)
 
 
 @pytest.mark.parametrize("rule, fragment", [
     ("nan_score", "the winner rule '{m}:nan_score' scored the bid of UAV 0 at t = 0 s NaN or infinite; "
                   "a rule's score must be a finite number"),
     ("raises", "the winner rule '{m}:raises' raised ValueError: no battery reading ({m}.py, line "),
+    ("out_of_bounds", "the winner rule '{m}:out_of_bounds' raised IndexError"),  # a crash (SIGSEGV) otherwise
 ])
 def test_a_rule_that_breaks_the_contract_while_running_stops_the_run_in_one_line(rule, fragment, rules_module,
                                                                                  tmp_path, capsys):

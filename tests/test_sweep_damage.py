@@ -294,3 +294,28 @@ def test_a_damaged_failure_record_is_listed_and_its_run_redone(copy, capsys, dam
     assert run_cli(["sweep", "run", str(path), "--results", str(results), "--jobs", "1"]) == 0
     assert "ran 1, skipped 3 done before, 0 failed" in capsys.readouterr().out
     assert not os.path.lexists(record)
+
+
+def test_a_failure_record_is_shown_as_one_line_of_text(copy, capsys):
+    path, results, s, out = copy
+    run = s.runs[0]
+    shutil.rmtree(run.path(out, "summary").parent)
+    record = run.failure_path(out)
+    record.parent.mkdir()
+    record.write_text(json.dumps({"error": "PluginError: it \x1b[2J\x1b]0;owned\x07 failed\r\x85more"}))
+    assert run_cli(["sweep", "status", str(path), "--results", str(results)]) == 1
+    line = [line for line in capsys.readouterr().out.splitlines() if run.partition in line]
+    assert line == [f"  failed   {run.partition}: PluginError: it \\x1b[2J\\x1b]0;owned\\x07 failed"], line
+
+
+@pytest.mark.parametrize("command", ["status", "collect", "run"])
+def test_a_file_where_a_tables_folder_goes_is_refused_in_one_line_naming_it(copy, capsys, command):
+    path, results, s, out = copy
+    shutil.rmtree(out / "orders")
+    (out / "orders").write_text("not a folder")
+    before = snapshot(results)
+    assert run_cli(["sweep", command, str(path), "--results", str(results)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"{str(out / 'orders')!r}" in err and "move or remove it" in err
+    assert snapshot(results) == before

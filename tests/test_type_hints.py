@@ -18,11 +18,11 @@ PACKAGE = Path(dronefleet.__file__).resolve().parent
 MODULES = (
     *(f"{name}.py" for name in ("api", "cli", "config", "console", "outputs", "provenance", "records", "replay",
                                 "reproduce", "scenarios", "sweeps", "executors", "figstyle", "fingerprint",
-                                "supervisor")),
+                                "supervisor", "contract", "plugins")),
     *(f"delivery/{name}.py" for name in ("config", "scenario", "simulation", "fleet", "records", "metrics",
                                          "analysis", "figures", "orders", "replay")),
-    *(f"replenishment/{name}.py" for name in ("params", "bounds", "scenario", "simulate", "experiments", "study",
-                                              "figures", "replay")),
+    *(f"replenishment/{name}.py" for name in ("params", "bounds", "config", "scenario", "simulate", "experiments",
+                                              "study", "figures", "replay")),
 )
 
 

@@ -57,11 +57,9 @@ without loading anything: a ``"module:function"`` path is kept as the name it is
 forecast is :func:`reservation_wait`; the engine runs the two phases.
 """
 
-import contextlib
 import functools
 import importlib
 import logging
-import threading
 from importlib.metadata import entry_points
 from typing import NamedTuple
 
@@ -74,8 +72,9 @@ from numba.core.dispatcher import Dispatcher
 from numba.core.errors import NumbaError
 from numba.core.registry import cpu_target
 
-from ..config import ConfigError, _suggest
+from ..config import ConfigError, _suggest, brief
 from ..fpmath import log
+from ..plugins import IMPORT_NOTICE_S, importing  # read at each import: tests shorten it
 
 logger = logging.getLogger(__name__)  # not ``log``: that is fpmath's logarithm here
 
@@ -88,8 +87,6 @@ PLUGIN = -2
 #: What the engine passes to a rule and expects back (see the module doc).
 RULE_ARGS = (types.float64, types.float64, types.float64, types.float64, typeof(np.random.default_rng(0)))
 RULE_SIGNATURE = types.Tuple((types.boolean, types.float64))(*RULE_ARGS)
-#: After how long a plugin module still importing is said to be [s] (it may hang: Ctrl-C stops it).
-IMPORT_NOTICE_S = 10.0
 
 
 @njit(cache=True)
@@ -244,49 +241,31 @@ def _plugin(name: str) -> Rule:
                             f"{', '.join(map(repr, names))}, or a plugin's 'package.module:function'")
         entry_point = next(iter(found))
         try:
-            with _importing(entry_point.module, name):
+            with importing(entry_point.module, f"winner rule {name!r}", IMPORT_NOTICE_S):
                 kernel = entry_point.load()
         except Exception as e:  # the plugin's own error, whatever it is: the user must see it
             raise RuleError(f"is an entry point of {ENTRY_POINT_GROUP} ({entry_point.value}) that fails to "
-                            f"load: {type(e).__name__}: {e}") from None
+                            f"load: {type(e).__name__}: {brief(e)}") from None
     return _checked(kernel)
-
-
-@contextlib.contextmanager
-def _importing(module_name: str, rule: str):
-    """Around the import of a plugin's module: one that calls sys.exit is an ImportError, Ctrl-C
-    names the module (an import may hang), and an import still going after IMPORT_NOTICE_S is said."""
-    notice = threading.Timer(IMPORT_NOTICE_S, lambda: logger.warning(
-        f"dronefleet: still importing module {module_name!r} of winner rule {rule!r} after "
-        f"{IMPORT_NOTICE_S:g} s (Ctrl-C stops)"))
-    notice.daemon = True
-    notice.start()
-    try:
-        yield
-    except SystemExit as e:  # not an Exception: it would end the process, silently
-        raise ImportError(f"it calls sys.exit({e.code!r}) when imported") from None
-    except KeyboardInterrupt:
-        raise KeyboardInterrupt(f"while importing module {module_name!r} of winner rule {rule!r}") from None
-    finally:
-        notice.cancel()
 
 
 def _import_path(path: str):
     """The object at ``"package.module:attribute"``."""
     module_name, _, attribute = path.partition(":")
     try:
-        with _importing(module_name, path):
+        with importing(module_name, f"winner rule {path!r}", IMPORT_NOTICE_S):
             module = importlib.import_module(module_name)
     except Exception as e:  # ImportError, or whatever the module raises on import
-        raise RuleError(f"names module {module_name!r}, which cannot be imported ({type(e).__name__}: {e}); "
+        raise RuleError(f"names module {module_name!r}, which cannot be imported ({type(e).__name__}: {brief(e)}); "
                         "allowed: a built-in rule, an installed plugin or 'package.module:function'") from None
     try:
-        return functools.reduce(getattr, attribute.split("."), module)
+        with importing(module_name, f"winner rule {path!r}", IMPORT_NOTICE_S):  # a module __getattr__ runs code too
+            return functools.reduce(getattr, attribute.split("."), module)
     except AttributeError:
         raise RuleError(f"names {attribute!r}, which module {module_name!r} does not have") from None
     except Exception as e:  # a module __getattr__ or property of the plugin's that raises
         raise RuleError(f"names {attribute!r}, which module {module_name!r} fails to give "
-                        f"({type(e).__name__}: {e})") from None
+                        f"({type(e).__name__}: {brief(e)})") from None
 
 
 def _checked(kernel) -> Rule:
@@ -298,6 +277,9 @@ def _checked(kernel) -> Rule:
     if not isinstance(bids_on, str) or bids_on not in BIDS_ON:  # a list would not even hash
         raise RuleError(f"has bids_on = {bids_on!r}; set the function's attribute bids_on to one of "
                         f"{', '.join(map(repr, BIDS_ON))} (see dronefleet.delivery.auction)")
+    # An index out of an array's bounds is then an IndexError naming the rule, not a crash (SIGSEGV)
+    # or a wrong score; a rule is a few operations of the auction, the check costs little.
+    kernel.targetoptions["boundscheck"] = True
     try:
         # With the return type given, numba converts what the rule returns (a literal True, an int score).
         kernel.compile(RULE_SIGNATURE)
@@ -315,8 +297,9 @@ def _checked(kernel) -> Rule:
     # Compiled for the return type, numba converts what the rule returns: a literal True or an
     # int score, but also a (score, bids) pair the wrong way round. What it returns of itself tells.
     returns = _own_return_type(kernel)
-    if not (isinstance(returns, types.BaseTuple) and len(returns) == 2 and isinstance(returns[0], types.Boolean)
-            and isinstance(returns[1], (types.Float, types.Integer))):
+    if returns is not None and not (isinstance(returns, types.BaseTuple) and len(returns) == 2
+                                    and isinstance(returns[0], types.Boolean)
+                                    and isinstance(returns[1], (types.Float, types.Integer))):
         raise RuleError(f"returns {returns}, not (bids, score): a bool, then a float, in this order")
     return Rule(PLUGIN, kernel, bids_on)
 
@@ -347,10 +330,16 @@ class _TypingPipeline(compiler.CompilerBase):
 
 
 def _own_return_type(kernel):
-    """The numba type a rule returns for RULE_ARGS when no return type is imposed."""
-    with global_compiler_lock:
-        return compiler.compile_extra(cpu_target.typing_context, cpu_target.target_context, kernel.py_func,
-                                      RULE_ARGS, None, compiler.Flags(), {}, pipeline_class=_TypingPipeline)
+    """The numba type a rule returns for RULE_ARGS when no return type is imposed; None if this
+    front end cannot tell (the rule compiled for the contract already, with numba's own pipeline)."""
+    flags = compiler.Flags()
+    flags.nrt = True  # as @njit: a rule may allocate (np.zeros)
+    try:
+        with global_compiler_lock:
+            return compiler.compile_extra(cpu_target.typing_context, cpu_target.target_context, kernel.py_func,
+                                          RULE_ARGS, None, flags, {}, pipeline_class=_TypingPipeline)
+    except NumbaError:
+        return None
 
 
 @njit(cache=True)

@@ -17,12 +17,12 @@ and the fitted exponent of loop time against fleet size.
 ``dronefleet run`` of the paper config, a bare ``python -c "import numpy, numba"`` and
 ``dronefleet --help``.
 
-``--sweep FILE [--jobs J]`` times a whole sweep instead (``configs/sweeps/rules.toml``:
-the 360 runs of Figure 16), as ``dronefleet sweep run`` runs it on J local processes,
-tables written (into a temporary directory): wall time and runs per minute.
+A whole sweep is timed by ``python -m dronefleet.bench sweep FILE`` (it runs the sweeps,
+which sit above this package), in a fresh cache made here (:func:`fresh_cache`).
 """
 
 import argparse
+import contextlib
 import math
 import os
 import resource
@@ -31,6 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 #: Fleet sizes of the scaling table and the weeks each is run for (fewer for the big ones).
@@ -142,23 +143,26 @@ def main(argv=None):
     parser.add_argument("--scaling", action="store_true", help="add the fleet-size table (25-1600 UAVs)")
     parser.add_argument("--big", action="store_true", help="add 10,000 UAVs to the fleet-size table")
     parser.add_argument("--process", action="store_true", help="add whole-process times (run, imports, --help)")
-    parser.add_argument("--sweep", metavar="FILE", help="time this sweep instead, e.g. configs/sweeps/rules.toml")
-    parser.add_argument("--jobs", type=int, help="local processes of --sweep (default: all CPUs)")
     args = parser.parse_args(argv)
     if args.warm:
         return _bench(args, float("nan"))
-    # A fresh, empty numba cache, set before numba is imported here and in the child that fills it.
+    with fresh_cache() as compile_s:
+        _bench(args, compile_s)
+
+
+@contextlib.contextmanager
+def fresh_cache() -> Iterator[float]:
+    """A fresh, empty numba cache for this process and the processes it starts, filled by a child
+    process that compiles the engine; yields that child's wall time [s] (the compile time)."""
+    # set before numba is imported here and in the child that fills it
     with tempfile.TemporaryDirectory(prefix="dronefleet-bench-cache-") as cache:
         os.environ["NUMBA_CACHE_DIR"] = cache
         start = time.perf_counter()
         subprocess.run([sys.executable, "-c", "import dronefleet.delivery.bench as b; b.compile_engine()"], check=True)
-        _bench(args, time.perf_counter() - start)
+        yield time.perf_counter() - start
 
 
 def _bench(args, compile_s):
-    if args.sweep:
-        return bench_sweep(args.sweep, args.jobs, compile_s)
-
     start = time.perf_counter()
     compile_engine()
     load_s = time.perf_counter() - start
@@ -171,24 +175,6 @@ def _bench(args, compile_s):
     print(f"peak memory (max RSS of the process doing the runs): {peak_mb:.0f} MB")
     if args.process:
         bench_process()
-
-
-def bench_sweep(path, jobs, compile_s):
-    """Run every run of the sweep file ``path`` on ``jobs`` processes into a temporary directory; print the times."""
-    from ..sweeps import available_cpus, load_sweep, run_sweep
-
-    sweep = load_sweep(path)
-    jobs = jobs or available_cpus()
-    with tempfile.TemporaryDirectory(prefix="dronefleet-bench-") as results:
-        start = time.perf_counter()
-        _, failures = run_sweep(sweep, Path(results) / sweep.name, sweep.runs, jobs)
-        wall = time.perf_counter() - start
-    first = sweep.runs[0].config
-    print(f"sweep {sweep.name}: {sweep.describe()} ({first.n_uavs} UAVs, {first.horizon_weeks:g}-week runs), "
-          f"{jobs} processes, {len(failures)} failed; Python {sys.version.split()[0]}")
-    print(f"compile time (fresh process, empty cache): {compile_s:.1f} s")
-    print(f"wall time {wall:.1f} s ({wall / 60.0:.2f} min): {60.0 * len(sweep.runs) / wall:.0f} runs per minute, "
-          f"{jobs * wall / len(sweep.runs):.3f} process-seconds per run (tables written)")
 
 
 if __name__ == "__main__":

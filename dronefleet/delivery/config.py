@@ -63,6 +63,7 @@ __all__ = [
     "SECONDS_PER_WEEK",
     "config_from_dict",
     "default_config",
+    "describe",
     "load_config",
     "replace",
     "resolve_key",
@@ -629,3 +630,9 @@ def replace(config: Config, **changes: Any) -> Config:
         if name not in PARAMETERS:
             raise ConfigError(_unknown_name_message(name))
     return dataclasses.replace(config, **changes)
+
+
+def describe(config: Config) -> str:
+    """One line naming the run (the head of ``dronefleet run``, the replay page's title)."""
+    return (f"seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
+            f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks")

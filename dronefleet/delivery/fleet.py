@@ -22,11 +22,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..config import ConfigError
+from ..config import ConfigError, brief
 
 if TYPE_CHECKING:
     from .config import Config
-    from .simulation import RunResult
+    from .result import RunResult
 
 #: Columns a fleet file must have.
 COLUMNS = ("t_s", "uav", "soh", "w_distance", "w_mass", "w_soc", "intercept", "steps", "soc", "lost", "period")
@@ -123,7 +123,7 @@ def load_fleet(path: str | os.PathLike, config: Config) -> SavedFleet:
     try:
         rows = pq.ParquetFile(path).metadata.num_rows
     except (OSError, pa.ArrowException) as error:
-        raise refuse(f"is not a readable parquet file ({_one_line(error)})") from None
+        raise refuse(f"is not a readable parquet file ({brief(error)})") from None
     if rows > MAX_ROWS:
         raise refuse(f"has {rows} rows; a fleet file has at most {MAX_ROWS}")
     try:
@@ -150,7 +150,7 @@ def load_fleet(path: str | os.PathLike, config: Config) -> SavedFleet:
     try:
         table = pq.read_table(path, columns=list(COLUMNS))
     except (OSError, pa.ArrowException) as error:
-        raise refuse(f"cannot be read ({_one_line(error)})") from None
+        raise refuse(f"cannot be read ({brief(error)})") from None
     t = table["t_s"].to_numpy(zero_copy_only=False).astype(np.float64)
     if table.num_rows == 0 or table["t_s"].null_count or not np.isfinite(t).all() or (t < 0).any():
         raise refuse("column t_s must hold finite times >= 0, one per row (an empty file has none)")
@@ -191,12 +191,6 @@ def load_fleet(path: str | os.PathLike, config: Config) -> SavedFleet:
                      f"allowed: one integer in [1, {np.iinfo(np.int16).max - 1}]")
     return SavedFleet(soh=soh, coef=np.column_stack(weights[:3]), intercept=weights[3], steps=steps,
                       soc=soc, lost=lost, period=int(periods.pop()))
-
-
-def _one_line(error):
-    """An exception's message on one line, cut to 200 characters."""
-    text = " ".join(str(error).split())
-    return text if len(text) <= 200 else text[:197] + "..."
 
 
 def _num(x):

@@ -16,7 +16,7 @@ from .policy import standardise
 if TYPE_CHECKING:
     import pandas
 
-    from .simulation import RunResult
+    from .result import RunResult
 
 #: Child of the run's SeedSequence that draws the accuracy test points. The simulation
 #: uses children 0-3, so evaluating a policy never changes a run.

@@ -45,7 +45,7 @@ from .config import SECONDS_PER_WEEK, Config, config_from_dict
 from .engine import IN_FLIGHT, OUTCOME_DELIVERED, OUTCOME_NAMES
 
 if TYPE_CHECKING:
-    from .simulation import RunResult
+    from .result import RunResult
 
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")
 

@@ -18,7 +18,7 @@ import pyarrow as pa
 
 from ..config import ConfigError
 from ..datafiles import checked_column, parquet_rows, read_parquet
-from .config import SECONDS_PER_WEEK, Config
+from .config import SECONDS_PER_WEEK, Config, describe
 
 __all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS", "MAX_ORDERS", "MAX_SAMPLES"]
 
@@ -60,6 +60,7 @@ def _checked_tables(run_dir: Path, config: Config):
     integer, floating, text = pa.types.is_integer, pa.types.is_floating, pa.types.is_string
     in_run = f"finite, in [0, {horizon:g}] s"
     soc = "finite, in [0, 100] %"
+    farthest = config.distance_max_m * (1 + 1e-9)
 
     def read(name, columns):
         """``{column: (type predicate, ok, allowed, nullable)}`` of table ``name``, checked."""
@@ -77,7 +78,9 @@ def _checked_tables(run_dir: Path, config: Config):
     orders = read("orders", {
         "order_id": (integer, lambda x: x == np.arange(len(x)), "the row number (orders 0, 1, 2, ... in order)", False),
         "arrival_s": (floating, times, in_run, False),
-        "distance_m": (floating, lambda x: np.isfinite(x) & (x >= 0), "finite, >= 0 m", False)})
+        # at most the run's farthest order (with a margin for the rounding of the annulus's square root)
+        "distance_m": (floating, lambda x: np.isfinite(x) & (x >= 0) & (x <= farthest),
+                       f"finite, in [0, {config.distance_max_m:g}] m", False)})
     attempts = read("attempts", {
         "uav": (integer, lambda x: (x >= 0) & (x < n_uavs), f"a UAV of the run, 0 to {n_uavs - 1}", False),
         "order_id": (integer, lambda x: (x >= 0) & (x < len(orders)),
@@ -86,8 +89,8 @@ def _checked_tables(run_dir: Path, config: Config):
         "takeoff_soc": (floating, percent, soc, False),
         "outcome": (text, lambda x: np.isin(x, OUTCOMES), ", ".join(OUTCOMES), False),
         # null: the flight had not turned, or landed, by the horizon
-        "turn_s": (floating, np.isfinite, "finite or null", True),
-        "return_s": (floating, np.isfinite, "finite or null", True),
+        "turn_s": (floating, times, f"{in_run}, or null", True),
+        "return_s": (floating, times, f"{in_run}, or null", True),
         "return_soc": (floating, percent, f"{soc}, or null", True)})
     series = read("timeseries", {
         "t_s": (floating, times, in_run, False),
@@ -110,7 +113,6 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
     (``t_s``, ``orders``).
     """
     from .records import read_config
-    from .scenario import describe
 
     config = read_config(run_dir / "summary.parquet")
     flights = parquet_rows(run_dir / "attempts.parquet")

@@ -1,8 +1,8 @@
 """The UAV delivery scenario behind the :mod:`dronefleet.scenarios` contract.
 
 A thin adaptor over the delivery modules (this subpackage, the schema in
-:mod:`dronefleet.delivery.config`, the summary in :mod:`dronefleet.cli`): it adds no behaviour
-and changes no output byte. The schema is :data:`dronefleet.delivery.config.PARAMETERS` (units in
+:mod:`dronefleet.delivery.config`; the printed summary, :func:`format_metrics`, is here): it adds no
+behaviour and changes no output byte. The schema is :data:`dronefleet.delivery.config.PARAMETERS` (units in
 each doc), validation :func:`dronefleet.delivery.config.load_config`, the tables those of
 :mod:`dronefleet.delivery.records`. ``dronefleet run`` keeps its own delivery path for
 what only delivery has (fleet files, the progress bar in weeks); it prints and writes
@@ -17,16 +17,17 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..scenarios import Field
-from .config import PARAMETERS, AnyText, Config, Interval, Options, default_config, load_config, resolve_key
+from ..contract import Field
+from .config import (PARAMETERS, AnyText, Config, Interval, Options, default_config, describe, load_config,
+                     resolve_key)
 from .config import replace as replace_fields
 
 if TYPE_CHECKING:
     import pyarrow
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
-           "replace", "value", "read_config", "table_schemas", "simulate", "outdated", "format_summary", "describe",
-           "label", "replay_data"]
+           "replace", "value", "read_config", "table_schemas", "simulate", "outdated", "format_summary",
+           "format_metrics", "describe", "label", "replay_data"]
 
 NAME = "delivery"
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
@@ -106,16 +107,37 @@ def outdated(config: Config, summary: Path) -> bool:
     return fleet.exists() and fleet.stat().st_mtime_ns > summary.stat().st_mtime_ns
 
 
+def _duration(seconds):
+    if seconds != seconds:  # nan
+        return "n/a"
+    hours, rest = divmod(seconds, 3600.0)
+    return f"{int(hours)} h {rest / 60.0:04.1f} min"
+
+
+def format_metrics(m: dict, wall_s: float | None = None) -> str:
+    """The run's summary as printed by ``dronefleet run`` (``m`` from :func:`~dronefleet.delivery.metrics.run_metrics`;
+    the wall time line only if ``wall_s`` is given)."""
+    delivered_pct = 100.0 * m["delivered"] / m["orders_arrived"] if m["orders_arrived"] else float("nan")
+    lines = [
+        ("orders arrived", f"{m['orders_arrived']}"),
+        ("delivered", f"{m['delivered']} ({delivered_pct:.1f} %)"),
+        ("median delivery time", f"{_duration(m['median_delivery_time_s'])} ({m['median_delivery_time_s']:.0f} s)"),
+        ("aborted attempts", f"{m['aborted_pct']:.1f} % ({m['aborted_attempts']} of {m['attempts']})"),
+        ("backlog age", f"{m['backlog_age_s'] / 86400.0:.1f} days over {m['pending']} pending orders"),
+        ("lost UAVs", f"{m['lost_uavs']}"),
+        ("decision accuracy", f"{100.0 * m['decision_accuracy']:.1f} % (fleet mean at the end)"),
+    ]
+    if m["reservations_won"]:
+        lines.append(("reservations won", f"{m['reservations_won']}, median wait "
+                      f"{_duration(m['median_reservation_wait_s'])}, forecast met {m['forecast_met_pct']:.1f} %"))
+    if wall_s is not None:
+        lines.append(("wall time", f"{wall_s:.2f} s"))
+    return "\n".join(f"  {label:<22}{value}" for label, value in lines)
+
+
 def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
     """The run's metrics as ``dronefleet run`` prints them, from its summary table."""
-    from ..cli import format_summary as lines
-
-    return lines(tables["summary"].to_pylist()[0])
-
-
-def describe(config: Config) -> str:
-    return (f"seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
-            f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks")
+    return format_metrics(tables["summary"].to_pylist()[0])
 
 
 def label(config: Config) -> str:

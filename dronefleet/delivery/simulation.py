@@ -29,6 +29,7 @@ from .energy import charge_rate, config_power, drain_per_watt
 from .fleet import SavedFleet, load_fleet
 from .orders import Orders, generate_orders
 from .policy import initial_fit, optimal_init, standardise
+from .result import RunResult
 from ..supervisor import BUILTIN_CONTROLLER, SupervisorError, load_supervisor
 
 
@@ -48,25 +49,6 @@ class RunState:
     period: int
     max_attempts: int       # rows the attempt table may grow to (attempt_limit)
     rule_kernel: object = None  # a plugin rule's compiled function; None for a built-in rule
-
-
-@dataclass
-class RunResult:
-    """What a run recorded (docs/delivery-model.md section 10), as numpy arrays; ``records`` turns it into tables.
-
-    ``snapshots`` holds one dict of fleet arrays per week end (and at the horizon);
-    ``period`` is 1 for a new fleet, the saved fleet's period plus one for a warm start;
-    ``reservations`` counts the auctions won by a reservation bid.
-    """
-
-    config: object
-    orders: dict
-    attempts: dict
-    snapshots: list
-    series: dict
-    auctions: int
-    reservations: int
-    period: int
 
 
 class InvalidStateError(RuntimeError):

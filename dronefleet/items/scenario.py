@@ -32,12 +32,13 @@ import json
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import fields
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
-from ..scenarios import Field
+from ..contract import Field
 from .params import KEYS, Params, allowed, check
 from .simulate import robot_columns, summary_columns
 
@@ -46,7 +47,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
-           "simulate", "format_summary", "describe", "label"]
+           "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable"]
 
 NAME = "items"
 TABLES = ("summary", "robots")
@@ -250,3 +251,20 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         sd = f"{x.std(ddof=1):{fmt}}" if x.size > 1 else "-"
         lines.append(f"  {text:<26}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}")
     return "\n".join(lines)
+
+
+def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
+    """The replay page's data of a run folder (its config read from ``summary.parquet``), of its
+    trial ``trial`` (None: its first): :func:`dronefleet.items.replay.replay_data`."""
+    from ..records import chosen_trial
+    from .replay import replay_data as data
+
+    config = read_config(run_dir / "summary.parquet")
+    return data(run_dir, config, describe(config), chosen_trial(run_dir, replicates(config), trial))
+
+
+def check_replayable(config: Config) -> None:
+    """Refuse ``run --replay`` of a run whose page would be too large (:mod:`dronefleet.items.replay`)."""
+    from .replay import check_replayable as check
+
+    check(config)

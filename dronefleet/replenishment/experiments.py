@@ -1,7 +1,7 @@
 """The replenishment study's experiment grids (docs/replenishment-model.md section 10) and running them.
 
 The grids live in ``configs/sweeps/replenishment-figNN.toml`` (the one source of truth), sweep
-files read by :func:`dronefleet.sweeps.load_sweep` like any other: ``[set]`` holds the values
+files read like any other (:func:`dronefleet.sweeps.load_sweep`): ``[set]`` holds the values
 every configuration shares (``trials`` among them), and each ``[[grid]]`` table one cartesian
 product of lists; the configurations are the union of the products, in file order, each a
 run holding all its trials. Everything not named keeps the default of
@@ -10,26 +10,26 @@ run holding all its trials. Everything not named keeps the default of
 
 :func:`run_configs` runs a list of configurations (each one's trials in one
 :func:`~dronefleet.replenishment.simulate.simulate` call, the configurations spread over
-processes) into a tidy per-trial table; :func:`bounds_table` gives the analytic bounds
+processes by the executor the caller passes: this package sits below the sweeps and their
+executors, docs/scenario-contract.md) into a tidy per-trial table; :func:`bounds_table` gives the analytic bounds
 (section 9) of each configuration.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
-from ..config import shipped_config
-from ..sweeps import SweepError
+from ..config import SweepError, shipped_config
 from .bounds import BoundUndefinedError, bounds
 from .params import Params
 
 if TYPE_CHECKING:
-    from .scenario import Config
+    from .config import Config
 
 __all__ = ["FIGURES", "CONFIG_COLUMNS", "METRIC_COLUMNS", "grid_path", "config_row", "run_configs",
            "bounds_table"]
@@ -62,18 +62,19 @@ def _trials_of(config) -> dict:
     return {column: result[column] for column in ("trial", "seed", *METRIC_COLUMNS)}
 
 
-def run_configs(configs: Iterable[Config], jobs: int = 1,
+def run_configs(configs: Iterable[Config], outcomes: Callable | None = None,
                 done: dict[Config, dict[str, Any]] | None = None) -> pd.DataFrame:
     """Every trial of every configuration as one tidy table.
 
     Parameters
     ----------
-    configs : sequence of replenishment configs (:class:`dronefleet.replenishment.scenario.Config`)
+    configs : sequence of replenishment configs (:class:`dronefleet.replenishment.config.Config`)
         Each one's trials (``first_trial`` .. ``first_trial + trials - 1``, trial k with seed
         876 k) run in one ``simulate`` call; the runs of a sweep give them (``run.config``).
-    jobs : int
-        Processes (:func:`dronefleet.executors.local`; the first configuration runs here
-        and compiles or loads the kernel before any worker starts). A bar counts the
+    outcomes : callable, optional
+        ``outcomes(function, items)`` yields ``(item, result, error)`` as each item is done
+        (:class:`dronefleet.contract.StudyContext.map`: ``reproduce`` spreads them over its
+        ``--jobs`` processes); None: one after the other in this process. A bar counts the
         configurations done (:func:`dronefleet.console.progress`: on a terminal only).
     done : dict, optional
         Per-trial results by configuration, already run (those are not run again) and
@@ -87,13 +88,13 @@ def run_configs(configs: Iterable[Config], jobs: int = 1,
         ``trial``, ``seed`` and :data:`METRIC_COLUMNS`.
     """
     from ..console import progress
-    from ..executors import local
 
     configs = list(configs)
     done = {} if done is None else done
     todo = list(dict.fromkeys(config for config in configs if config not in done))
+    each = outcomes or (lambda function, items: ((item, function(item), None) for item in items))
     with progress(len(todo), "configuration", "  configurations") as bar:
-        for config, result, error in local(_trials_of, todo, jobs):
+        for config, result, error in each(_trials_of, todo):
             if error is not None:
                 raise SweepError(f"configuration {config_row(config.params)}: {error}")
             done[config] = result

@@ -55,6 +55,9 @@ FLAG_REQUESTING, FLAG_DEPLETED, FLAG_TO_WORK = 16, 32, 64
 # Time-series columns: robots per phase P0..P3 (workers, then chargers),
 # stored energy (sum of batteries), cumulative work (points).
 TS_WORKER_PHASE, TS_CHARGER_PHASE, TS_STORED, TS_WORK = 0, 4, 8, 9
+#: The controller phases P0..P3 of each role, in the order of their time-series columns.
+PHASES = {"workers": ("charging", "to_work", "working", "to_charge"),
+          "chargers": ("charging", "to_transfer", "sharing", "to_base")}
 N_TS = 10
 
 # Rates passed in ``rates`` (float64 array).

@@ -1,0 +1,253 @@
+"""The scenario contract (dronefleet.contract, docs/scenario-contract.md) held by every registered scenario,
+and scenarios installed from other packages (entry points of ``dronefleet.scenarios``): the example
+package runs through ``dronefleet run``, a local sweep and the Python API; one that fails to import or
+breaks the contract is refused in one line naming its entry point; a config never names code."""
+
+import itertools
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+
+from dronefleet import cli, records, scenarios
+from dronefleet.config import ConfigError
+from dronefleet.contract import ENTRY_POINT_GROUP, ScenarioContract, contract_problems
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLE = ROOT / "examples" / "dronefleet-scenario-random-walk"
+#: A tiny run of each scenario, as changes of its defaults (a scenario not listed runs its defaults).
+TINY = {
+    "delivery": {"horizon_weeks": 0.02, "n_uavs": 3},
+    "replenishment": {"trials": 2, "ticks": 300},
+    "items": {"trials": 2, "steps": 50},
+    "random_walk": {"n_robots": 3, "steps": 50},
+}
+NAMES = (f"installed{n}" for n in itertools.count())  # imports and entry points are cached: a name per test
+
+
+def check_contract(name, tmp_path):
+    """Every rule of the contract that can be checked from outside, on the registered scenario ``name``."""
+    scenario = scenarios.get(name)
+    module = scenario.module
+    assert contract_problems(module) == [] and isinstance(module, ScenarioContract) and module.NAME == name
+    defaults = module.load(None, (), None)
+    for key, default in module.DEFAULTS.items():
+        assert module.resolve_key(key) == key == module.resolve_key(f"{module.SCHEMA[key].section}.{key}")
+        assert module.value(defaults, key) == default and type(module.value(defaults, key)) is type(default), key
+    with pytest.raises(ConfigError):
+        module.resolve_key("no_such_key")
+    config = module.replace(defaults, TINY.get(name, {}))
+    assert config == module.replace(defaults, TINY.get(name, {})) and json.loads(config.to_json())
+    tables = module.simulate(config)
+    assert set(tables) == set(module.TABLES) and "summary" in tables
+    schemas = module.table_schemas()
+    for table_name, table in tables.items():
+        assert [(f.name, f.type) for f in table.schema] == [(f.name, f.type) for f in schemas[table_name]]
+        assert table.num_rows > 0, table_name
+    assert module.format_summary(tables).strip()
+    assert module.describe(config).strip() and "/" not in module.label(config)
+    records.write_tables(tables, tmp_path / "run", config)
+    assert module.read_config(tmp_path / "run" / "summary.parquet") == config
+
+
+@pytest.mark.parametrize("name", sorted(scenarios.registered()))
+def test_every_registered_scenario_meets_the_contract(name, tmp_path):
+    check_contract(name, tmp_path)
+
+
+def test_the_contract_names_what_a_scenario_lacks():
+    class Partial:
+        NAME, SCHEMA, DEFAULTS, TABLES, FIGURES, SEED_KEY, SEEDS_REQUIRED = "p", {}, {"x": 1}, ("runs",), (), "x", True
+
+        def simulate(self, config, extra):
+            """One parameter too many."""
+
+    problems = contract_problems(Partial())
+    assert "has no load" in problems and "has no format_summary" in problems
+    assert "simulate does not take (config)" in problems
+
+
+# ---------------------------------------------------------------- installed from another package
+
+
+def install(folder, name, value, module=None, text=""):
+    """An installed distribution declaring the entry point ``name = value``, and ``module.py`` holding ``text``."""
+    dist = folder / f"{name}_scenario-0.1.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}-scenario\nVersion: 0.1\n")
+    (dist / "entry_points.txt").write_text(f"[{ENTRY_POINT_GROUP}]\n{name} = {value}\n")
+    if module:
+        (folder / f"{module}.py").write_text(text)
+
+
+def refused(capsys, argv, *fragments):
+    code = cli.main([str(arg) for arg in argv])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    for fragment in fragments:
+        assert fragment in err, err
+    return err
+
+
+def config_file(tmp_path, scenario):
+    path = tmp_path / "walk.toml"
+    path.write_text(f"scenario = {json.dumps(scenario)}\n")
+    return path
+
+
+WALK = (EXAMPLE / "dronefleet_scenario_random_walk" / "__init__.py").read_text()
+
+
+@pytest.mark.parametrize("text, fragment", [
+    (None, "fails to load: ModuleNotFoundError"),
+    ("raise RuntimeError('no licence server')\n", "fails to load: RuntimeError: no licence server"),
+    ("import sys\nsys.exit(3)\n", "fails to load: ImportError: it calls sys.exit(3)"),
+    (WALK.replace("\ndef simulate(config):", "\ndef simulated(config):"),
+     "does not meet the scenario contract (docs/scenario-contract.md): has no simulate"),
+    (WALK.replace("\ndef simulate(config):", "\ndef simulate(config, trials):"), "simulate does not take (config)"),
+    (WALK.replace('NAME = "random_walk"', 'NAME = "walk"'), "its NAME is 'walk'"),
+    (WALK.replace('"summary": pa.schema', '"totals": pa.schema').replace(
+        'TABLES = ("robots", "summary")', 'TABLES = ("robots", "totals")'), "TABLES has no 'summary'"),
+])
+def test_an_installed_scenario_that_fails_to_load_or_breaks_the_contract_is_refused_in_one_line(
+        tmp_path, monkeypatch, capsys, text, fragment):
+    name = next(NAMES)
+    install(tmp_path, name, f"{name}_module", None if text is None else f"{name}_module",
+            (text or "").replace('NAME = "random_walk"', f'NAME = "{name}"'))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    out = tmp_path / "out"
+    refused(capsys, ["run", config_file(tmp_path, name), "--out", out],
+            f"the {ENTRY_POINT_GROUP} entry point '{name}' ({name}_module) ", fragment)
+    assert not out.exists()
+    with pytest.raises(ConfigError, match=f"entry point '{name}'"):
+        scenarios.get(name)
+
+
+def test_an_installed_scenario_named_like_a_built_in_is_refused(tmp_path, monkeypatch, capsys):
+    install(tmp_path, "delivery", "impostor")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    message = f"the {ENTRY_POINT_GROUP} entry point 'delivery' (impostor) is named like the built-in scenario"
+    refused(capsys, ["reproduce", "--list"], message)
+    refused(capsys, ["run", config_file(tmp_path, "nosuch")], message)
+    assert scenarios.get("delivery") is scenarios.SCENARIOS["delivery"]  # the built-in is what a config runs
+
+
+@pytest.mark.parametrize("named", ["sidefx", "sidefx:simulate", "dronefleet.delivery.scenario", "os"])
+def test_a_config_selects_a_registered_scenario_never_a_module(tmp_path, monkeypatch, capsys, named):
+    (tmp_path / "sidefx.py").write_text(f"open({str(tmp_path / 'imported')!r}, 'w').close()\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    refused(capsys, ["run", config_file(tmp_path, named)], f"unknown scenario {named!r}",
+            "registered scenarios: delivery, replenishment")
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(f"[sweep]\nname = 'x'\nscenario = {json.dumps(named)}\nseeds = [0]\n")
+    refused(capsys, ["sweep", "plan", sweep, "--results", tmp_path / "results"], f"unknown scenario {named!r}")
+    assert not (tmp_path / "imported").exists() and "sidefx" not in sys.modules
+    assert not (tmp_path / "results").exists()
+
+
+def test_reproduce_lists_every_study_and_its_figures(capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["reproduce", "--list"])
+    printed = capsys.readouterr().out.splitlines()
+    assert stop.value.code == 0
+    assert printed[0].startswith("delivery: ") and "D4.4" in printed[0]
+    assert printed[1].split() == ["fig16", "fig17", "fig18", "fig19", "fig20"]
+    assert printed[2].startswith("replenishment: ") and printed[3].split() == ["fig09", "fig10", "fig11", "fig12"]
+
+
+#: A study of the random walk: one figure, its table the robots of one run.
+STUDY = """
+
+class _Study:
+    TITLE = "random walks"
+    FIGURES = ({figures})
+    QUICK = "the same"
+    TABLE_COLUMNS = {{"robots": {{"robot": "count", "moved": "count"}}}}
+
+    def run_together(self, study, figures):
+        pass
+
+    def tidy(self, study, figure):
+        table = simulate(Config(**DEFAULTS))["robots"].to_pandas()
+        study.write_table(table, study.figure_dir(figure) / "robots.parquet")
+
+    def draw(self, study, figure):
+        return [study.figure_dir(figure) / f"{{len(study.read_table(figure, 'robots'))}}.txt"]
+
+    def check(self, study, figure):
+        return []
+
+
+def study():
+    return _Study()
+"""
+
+
+def test_an_installed_scenarios_study_is_listed_and_reproduced(tmp_path, monkeypatch, capsys):
+    name = next(NAMES)
+    install(tmp_path, name, f"{name}_module", f"{name}_module",
+            WALK.replace('NAME = "random_walk"', f'NAME = "{name}"') + STUDY.format(figures=f'"{name}-fig1",'))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(SystemExit):
+        cli.main(["reproduce", "--list"])
+    assert f"{name}: random walks\n  {name}-fig1\n" in capsys.readouterr().out
+    assert cli.main(["reproduce", f"{name}-fig1", "--out", str(tmp_path / "out")]) == 0
+    assert pq.read_table(tmp_path / "out" / f"{name}-fig1" / "robots.parquet").num_rows == 4
+
+
+def test_an_installed_study_naming_a_figure_of_another_is_refused(tmp_path, monkeypatch, capsys):
+    name = next(NAMES)
+    install(tmp_path, name, f"{name}_module", f"{name}_module",
+            WALK.replace('NAME = "random_walk"', f'NAME = "{name}"') + STUDY.format(figures='"fig16",'))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    refused(capsys, ["reproduce", "--list"], f"scenario '{name}' names its figure 'fig16', which 'delivery' has")
+
+
+@pytest.fixture(scope="module")
+def example_site(tmp_path_factory):
+    """The example package installed as a user would, into a folder of its own (from a copy: the
+    build leaves files beside the sources)."""
+    tmp = tmp_path_factory.mktemp("example")
+    source, site = tmp / "source", tmp / "site"
+    shutil.copytree(EXAMPLE, source, ignore=shutil.ignore_patterns("__pycache__", "build", "*.egg-info"))
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
+                    "--target", str(site), str(source)], check=True, capture_output=True, timeout=300)
+    return site
+
+
+def test_the_installed_example_meets_the_contract(example_site, tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(example_site))
+    assert "random_walk" in scenarios.installed()
+    check_contract("random_walk", tmp_path)
+
+
+def test_the_installed_example_runs_through_run_a_local_sweep_and_the_api(example_site, tmp_path):
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(map(str, (example_site, ROOT)))}
+
+    def dronefleet(*argv):
+        done = subprocess.run([sys.executable, "-m", "dronefleet.cli", *map(str, argv)], capture_output=True,
+                              text=True, env=env, cwd=tmp_path, timeout=300)
+        assert done.returncode == 0, done.stderr
+        return done.stdout
+
+    (tmp_path / "walk.toml").write_text('scenario = "random_walk"\n[run]\nseed = 2\nn_robots = 5\n')
+    printed = dronefleet("run", "walk.toml", "--set", "steps=80", "--out", "run")
+    assert "stranded robots" in printed
+    ran = pq.read_table(tmp_path / "run" / "summary.parquet").to_pylist()
+    (tmp_path / "walks.toml").write_text('[sweep]\nname = "walks"\nbase = "walk.toml"\nseeds = [1, 2]\n'
+                                         '[set]\nsteps = 80\n[grid]\nbattery = [30, 40]\n')
+    dronefleet("sweep", "run", "walks.toml", "--results", "results", "--jobs", "2")
+    # the run of the sweep with the run's config (its seed a partition key, not a column): the same numbers
+    swept = pq.read_table(tmp_path / "results" / "walks" / "summary" / "battery=30" / "seed=2" / "part-0.parquet")
+    assert [{**row, "seed": 2} for row in swept.to_pylist()] == ran
+    dronefleet("sweep", "collect", "walks.toml", "--results", "results")
+    assert pq.read_table(tmp_path / "results" / "walks" / "collected.parquet").num_rows == 4
+    api = subprocess.run([sys.executable, "-c", "import dronefleet, json; r = dronefleet.run('random_walk', seed=2, "
+                          "n_robots=5, steps=80); print(json.dumps(r.summary.to_dict('records')))"],
+                         capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300, check=True)
+    assert json.loads(api.stdout) == ran

@@ -139,6 +139,18 @@ n_chargers = [0]
 strategy = ["mobile"]
 n_chargers = [1, 2, 3]
 """,
+    "items": """
+[sweep]
+name = "tiny"
+scenario = "items"
+runs_per_task = 2
+[set]
+trials = 2
+steps = 50
+[grid]
+algorithm = ["R", "GR"]
+capacity = [2, 10]
+""",
 }
 
 

@@ -92,6 +92,7 @@ def surfaces(runs: pandas.DataFrame, path: str | os.PathLike, x: str, y: str, pa
             ax.set_ylabel(AXES.get(y, y), fontsize=8)
             ax.set_zlabel(rate_label(runs), fontsize=8)
             ax.view_init(elev=25, azim=-135)
+            ax.set_box_aspect(None, zoom=0.85)  # room for the z label inside the panel
             if panel is not None:
                 ax.set_title(f"{panel} = {value:g}", fontsize=9)
         axes.flat[0].legend(handles=[Patch(color=algorithm_styles[a].colour, label=a) for a in algorithms],

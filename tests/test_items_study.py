@@ -167,3 +167,18 @@ def test_fig2_paths_start_at_x0_and_its_noise_free_curve_is_fig1s(quick_e0):
 
 def test_check_re_derives_figs_1_and_2(quick_e0):
     assert reproduce.check("items-fig02", quick_e0.parent, quick=True) == []
+
+
+@pytest.mark.parametrize("column, value, named", [("algorithm", "ZZ", "'ZZ'"), ("n_robots", 0, "n_robots = 0")])
+def test_a_table_holding_a_configuration_the_model_refuses_is_one_line(quick_fig04, tmp_path, capsys, column, value,
+                                                                       named):
+    out, _ = quick_fig04
+    runs = pd.read_parquet(out / "quick" / "items-fig04" / "runs.parquet")
+    runs.loc[3, column] = value
+    d = tmp_path / "quick" / "items-fig04"
+    d.mkdir(parents=True)
+    runs.to_parquet(d / "runs.parquet")
+    assert cli.main(["reproduce", "items-fig04", "--quick", "--redraw", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "runs.parquet" in err[0] and named in err[0]
+    assert not list(d.glob("*.png"))

@@ -21,10 +21,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..config import SweepError
+from ..config import ConfigError, SweepError
 from ..contract import StudyContext
 from . import experiments
 from .experiments import CONFIG_COLUMNS, RESULT_COLUMNS, USES
+from .params import Params
 
 TITLE = ("multi-robot item delivery and foraging (Liemhetcharat et al. 2015), Figs 1-12 and the t-tests "
          "(docs/items-model.md)")
@@ -224,6 +225,29 @@ DRAWINGS = {
 }
 
 
+#: The most configurations a figure's table may hold (items-fig07 holds 3,200).
+MAX_CONFIGURATIONS = 10_000
+
+
+def read_runs(study: StudyContext, figure: str) -> pd.DataFrame:
+    """The figure's ``runs`` table, its columns checked (``study.read_table``) and each of its
+    configurations held to a config file's rules, so that a tampered table is one line naming
+    the file and the configuration before anything is drawn or run."""
+    runs = study.read_table(figure, "runs")
+    path = study.root / figure / "runs.parquet"
+    configs = runs[list(CONFIG_COLUMNS)].drop_duplicates()
+    if len(configs) > MAX_CONFIGURATIONS:
+        raise SweepError(f"{path} holds {len(configs)} configurations; a figure's table holds at most "
+                         f"{MAX_CONFIGURATIONS}")
+    for values in configs.to_dict("records"):
+        try:
+            Params(**{k: v.item() if hasattr(v, "item") else v for k, v in values.items()}).validate()
+        except ConfigError as error:
+            raise SweepError(f"{path}: the configuration algorithm={values['algorithm']!r}, "
+                             f"n_robots={values['n_robots']!r} is not one the model allows: {error}") from None
+    return runs
+
+
 def draw(study: StudyContext, figure: str) -> list[Path]:
     """The figure's files (PNG, PDF, SVG; the t-tests: CSV and markdown) from its tables alone."""
     from . import figures
@@ -236,7 +260,7 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
                                       d / figure)
     if figure == "items-ttests":
         return figures.write_ttests(study.read_table(figure, "ttests"), d / figure)
-    runs = study.read_table(figure, "runs")
+    runs = read_runs(study, figure)
     files = []
     for suffix, experiment, x, second, kind in DRAWINGS[figure]:
         mine = runs if experiment is None else runs[runs["experiment"] == experiment]
@@ -291,7 +315,7 @@ def check(study: StudyContext, figure: str) -> list[str]:
             differences += _differ(figure, "paths", "x", paths["x"], experiments.logistic_paths().ravel())
         study.log(f"{figure}: {'identical' if not differences else f'{len(differences)} values differ'}")
         return differences
-    runs = study.read_table(figure, "runs")
+    runs = read_runs(study, figure)
     study.log(f"{figure}: re-running {len(CHECK_CONFIGS[figure])} configurations of {d / 'runs.parquet'}")
     for where in CHECK_CONFIGS[figure]:
         label = ",".join(f"{k}={v}" for k, v in where.items())

@@ -182,3 +182,14 @@ def test_a_table_holding_a_configuration_the_model_refuses_is_one_line(quick_fig
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "runs.parquet" in err[0] and named in err[0]
     assert not list(d.glob("*.png"))
+
+
+def test_redrawing_gives_the_same_bytes(quick_fig04):
+    out, _ = quick_fig04
+    d = out / "quick" / "items-fig04"
+    before = {path: path.read_bytes() for path in d.iterdir() if path.suffix in (".png", ".pdf", ".svg")}
+    assert len(before) == 6
+    for path in before:
+        path.unlink()
+    assert cli.main(["reproduce", "items-fig04", "--quick", "--redraw", "--out", str(out)]) == 0
+    assert {path: path.read_bytes() for path in before} == before

@@ -21,6 +21,7 @@ from __future__ import annotations
 import difflib
 import importlib.resources
 import os
+import re
 import reprlib
 import stat
 import tomllib
@@ -58,10 +59,15 @@ class SweepError(ConfigError):
 
 
 def one_line(text: str) -> str:
-    """``text`` on one line: each run of white space (newlines too) one space, any other character
-    that a terminal would act on (escape sequences) written as its Python escape."""
-    text = " ".join(str(text).split())
+    """``text`` on one line: each line break, with the white space around it, one space; any other
+    character that a terminal would act on (tab, escape sequences) written as its Python escape.
+    Spaces are kept as they are: a message may quote a value."""
+    text = _LINE_BREAK.sub(" ", str(text).strip())
     return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+#: A line break (any of those str.splitlines breaks at) and the white space around it.
+_LINE_BREAK = re.compile(r"[ \t]*[\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029]+\s*")
 
 
 def brief(error: BaseException) -> str:

@@ -2,7 +2,9 @@
 
 Integer operations and one division by 2**53 only, plus :func:`dronefleet.fpmath.log` in
 :func:`normal_pair`, so a stream gives the same numbers everywhere. A kernel holds its
-streams as a uint64 array ``rng[trial, stream, 4]`` and draws with ``(rng, trial, stream)``.
+streams as a uint64 array ``rng[trial, stream, 4]`` and draws with ``(rng, trial, stream)``;
+many streams stepped together (one per location, say) can be held as ``lanes[4, stream]``
+(one state word per row) and drawn with ``(lanes, stream)``: a loop over them vectorises.
 
 Two ways to seed them: :func:`spawn_states` (numpy's SeedSequence, one child per stream,
 used by the replenishment scenario) and :func:`seed_stream` (splitmix64 of a seed and a
@@ -15,33 +17,55 @@ import numpy as np
 from .fpmath import log
 from .jit import njit
 
-__all__ = ["next_u64", "uniform", "normal_pair", "seed_stream", "spawn_states"]
+__all__ = ["xoshiro_step", "next_u64", "lane_u64", "unit", "uniform", "normal_pair", "seed_stream", "spawn_states"]
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def _rotl(x, k):
     return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
 
 
 @njit(cache=True, inline='always')
+def xoshiro_step(s0, s1, s2, s3):
+    """One xoshiro256** step of the state words (uint64): (output, next s0, s1, s2, s3).
+
+    The multiplications by 5 and 9 are written as shifts and adds (the same bits), so that a
+    loop over independent streams vectorises on CPUs without a 64-bit vector multiply (AVX2).
+    """
+    r = _rotl((s1 << np.uint64(2)) + s1, 7)
+    result = (r << np.uint64(3)) + r
+    s2 = s2 ^ s0
+    s3 = s3 ^ s1
+    return result, s0 ^ s3, s1 ^ s2, s2 ^ (s1 << np.uint64(17)), _rotl(s3, 45)
+
+
+@njit(cache=True, inline='always')
 def next_u64(rng, trial, stream):
     """xoshiro256** step of ``rng[trial, stream]`` (uint64[4]); returns uint64."""
-    s0 = rng[trial, stream, 0]
-    s1 = rng[trial, stream, 1]
-    s2 = rng[trial, stream, 2] ^ s0
-    s3 = rng[trial, stream, 3] ^ s1
-    result = _rotl(s1 * np.uint64(5), 7) * np.uint64(9)
-    rng[trial, stream, 0] = s0 ^ s3
-    rng[trial, stream, 1] = s1 ^ s2
-    rng[trial, stream, 2] = s2 ^ (s1 << np.uint64(17))
-    rng[trial, stream, 3] = _rotl(s3, 45)
+    result, rng[trial, stream, 0], rng[trial, stream, 1], rng[trial, stream, 2], rng[trial, stream, 3] = \
+        xoshiro_step(rng[trial, stream, 0], rng[trial, stream, 1], rng[trial, stream, 2], rng[trial, stream, 3])
     return result
+
+
+@njit(cache=True, inline='always')
+def lane_u64(lanes, j):
+    """xoshiro256** step of stream ``j`` of ``lanes`` (4, streams), uint64, one state word per
+    row: a loop over j steps independent streams and vectorises; returns uint64."""
+    result, lanes[0, j], lanes[1, j], lanes[2, j], lanes[3, j] = \
+        xoshiro_step(lanes[0, j], lanes[1, j], lanes[2, j], lanes[3, j])
+    return result
+
+
+@njit(cache=True, inline='always')
+def unit(bits):
+    """The uniform double in [0, 1) of a uint64's top 53 bits."""
+    return np.float64(bits >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
 @njit(cache=True, inline='always')
 def uniform(rng, trial, stream):
     """Uniform double in [0, 1) with 53 random bits."""
-    return np.float64(next_u64(rng, trial, stream) >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+    return unit(next_u64(rng, trial, stream))
 
 
 @njit(cache=True, inline='always')

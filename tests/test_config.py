@@ -447,3 +447,13 @@ def test_run_size_limits_refuse_just_above_and_accept_at_the_limit(term):
         replace(default_config(), **{**_QUIET, **_SIZE_KNOBS[term](1.02 * limit)})
     assert str(e.value).startswith(f"the run would hold ~{1.02 * limit:.3g} ")
     assert str(e.value).endswith(f"; at most {limit:g} allowed")
+
+
+@pytest.mark.parametrize("text, shown", [
+    ("array([[0., 0.],\n       [0., 0.]])", "array([[0., 0.], [0., 0.]])"),  # a repr over lines: one line
+    ("got '  = 3'", "got '  = 3'"),  # spaces a message quotes are kept
+    ("bad\r\n\u2028value\n", "bad value"),
+    ("escape \x1b[2J\tand tab", "escape \\x1b[2J\\tand tab"),  # what a terminal would act on, shown
+])
+def test_a_config_error_is_one_line_of_printable_text(text, shown):
+    assert str(ConfigError(text)) == shown

@@ -232,7 +232,7 @@ def no_work(monkeypatch):
     import importlib
 
     simulate = importlib.import_module("dronefleet.replenishment.simulate")
-    monkeypatch.setattr(simulate, "_rng_states", lambda seeds: pytest.fail("trials were seeded"))
+    monkeypatch.setattr(simulate, "spawn_states", lambda *args: pytest.fail("trials were seeded"))
     monkeypatch.setattr(simulate.kernel, "run_trials", lambda *args: pytest.fail("the kernel ran"))
 
 

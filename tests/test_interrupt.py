@@ -71,14 +71,16 @@ def _children(pid):
         return []
 
 
-def _start(args, cwd, path=None, group=False):
-    """``python -m dronefleet ARGS`` (``path`` first on its module path) with Ctrl-C handled as in a
-    terminal (a process started in the background of a non-interactive shell would ignore it)."""
+def _start(args, cwd, path=None, group=False, script=None):
+    """``python -m dronefleet ARGS`` (or ``python -c SCRIPT ARGS``; ``path`` first on its module path)
+    with Ctrl-C handled as in a terminal (a process started in the background of a non-interactive
+    shell would ignore it)."""
     env = dict(os.environ)
     if path is not None:
         env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(path), env.get("PYTHONPATH"))))
     return subprocess.Popen(
-        [sys.executable, "-m", "dronefleet", *args], cwd=cwd, text=True, stdout=subprocess.PIPE,
+        [sys.executable, *(["-m", "dronefleet"] if script is None else ["-c", script]), *args], cwd=cwd, text=True,
+        stdout=subprocess.PIPE,
         stderr=subprocess.PIPE, env=env, start_new_session=group,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
@@ -188,8 +190,19 @@ def test_ctrl_c_of_a_sweep_keeps_the_runs_done_and_stops_its_workers(group, sign
     assert _leftovers(results) == []
 
 
+#: ``dronefleet`` whose replenishment --quick figures run far too long to end before the Ctrl-C.
+LONG_QUICK = '''
+import sys
+from dronefleet.replenishment import study
+study.QUICK_TICKS = 10**7
+from dronefleet.__main__ import main
+sys.exit(main())
+'''
+
+
 def test_ctrl_c_of_reproduce_in_a_kernel_is_a_clean_interruption(tmp_path):
-    process = _start(["reproduce", "fig09", "--quick", "--jobs", "1", "--out", str(tmp_path / "results")], tmp_path)
+    process = _start(["reproduce", "fig09", "--quick", "--jobs", "1", "--out", str(tmp_path / "results")], tmp_path,
+                     script=LONG_QUICK)
     _wait_until(process, lambda: _kernel_ticks(process.pid) >= KERNEL_TICKS)
     assert _interrupted(process) == ["dronefleet: interrupted"]
     assert _leftovers(tmp_path) == []

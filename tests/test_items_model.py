@@ -99,7 +99,7 @@ def decide(params, i, t, a, positions, observed, *, y=None, earmark=None, observ
     """``kernel.decide`` for robot ``i`` at node ``a``, step ``t``, on the given world and model."""
     opts, pars, _, _ = kernel_inputs(params)
     m1 = len(positions)
-    travel = np.zeros((m1, m1), dtype=np.int32)
+    travel = np.zeros((m1, m1))
     k.travel_table(np.asarray(positions, dtype=np.float64), params.speed, travel)
     n = params.n_robots
     rng = np.zeros((1, k.STREAM_ROBOT + n, 4), dtype=np.uint64)
@@ -202,7 +202,7 @@ def test_with_an_observation_range_robots_see_locations_near_their_path():
     # home (0.5, 0.5), 1 at (0.9, 0.5), 2 at (0.7, 0.55) beside the path, 3 at (0.7, 0.9) far from it;
     # robot 0 left home for 1 (4 steps), 2 steps done: at (0.7, 0.5). Robot 1 stands at 3.
     pos = np.array([HOME, (0.9, 0.5), (0.7, 0.55), (0.7, 0.9)])
-    travel = np.zeros((4, 4), dtype=np.int32)
+    travel = np.zeros((4, 4))
     k.travel_table(pos, 0.1, travel)
     assert travel[0, 1] == 4
     node, origin, dest, left = (np.array(v) for v in ([-1, 3], [0, 0], [1, 3], [2, 0]))
@@ -298,17 +298,77 @@ def test_the_logistic_truth_is_the_euler_step_clipped_at_zero():
 # ---------------------------------------------------------------- truths and samplers
 
 
-@pytest.mark.parametrize("mean", [0.01, 0.1, 0.5, 3.0, 40.0])
-def test_the_poisson_sampler_has_the_poisson_mean_and_variance(mean):
+def generation_streams(m1, seed=12345):
+    """Per-location generation streams (4, m1) as the kernel seeds them."""
     rng = np.zeros((1, 1, 4), dtype=np.uint64)
-    seed_stream(rng, 0, 0, 12345, 0)
+    lanes = np.zeros((4, m1), dtype=np.uint64)
+    for j in range(m1):
+        seed_stream(rng, 0, 0, seed, k.LOCATION_KEY + j)
+        lanes[:, j] = rng[0, 0]
+    return lanes
+
+
+def poisson_generation(mean, locations=2001, steps=50):
+    """Counts of ``steps`` steps of Poisson(mean) generation at ``locations`` locations."""
+    m1 = locations + 1
     parts, mu, e_mu = k.poisson_parts(mean)
-    assert parts == max(1, math.ceil(mean / 16.0))
-    draws = np.array([k.poisson(rng, 0, 0, parts, mu, e_mu) for _ in range(100_000)])
+    levels = np.zeros((k.POISSON_LEVELS, m1), dtype=np.int64)
+    k.poisson_levels(parts, mu, e_mu, levels[:, 0])
+    levels[:, :] = levels[:, :1]
+    count = np.zeros(m1, dtype=np.int64)
+    lanes = generation_streams(m1)
+    draws = []
+    for _ in range(steps):
+        before = count.copy()
+        generated = k.poisson_step(lanes, levels, count, np.zeros(m1, dtype=np.int64), np.full(m1, parts),
+                                   np.full(m1, mu), np.full(m1, e_mu))
+        assert generated == (count - before).sum()
+        draws.append(count[1:] - before[1:])
+    return np.concatenate(draws)
+
+
+@pytest.mark.parametrize("mean", [0.01, 0.1, 0.5, 3.0, 40.0])
+def test_poisson_generation_has_the_poisson_pmf(mean):
+    draws = poisson_generation(mean)
     se = math.sqrt(mean / draws.size)
     assert abs(draws.mean() - mean) < 5 * se
     assert abs(draws.var() / mean - 1.0) < 0.05
-    assert k.poisson(rng, 0, 0, *k.poisson_parts(0.0)) == 0
+    # chi-square of the pmf over the values expected at least 20 times, the rest pooled in the tails
+    values = np.arange(draws.max() + 1)
+    pmf = np.array([math.exp(-mean + v * math.log(mean) - math.lgamma(v + 1)) for v in values])
+    expected = pmf * draws.size
+    keep = expected >= 20
+    observed = np.bincount(draws, minlength=values.size)
+    cells_obs = np.append(observed[keep], observed[~keep].sum())
+    cells_exp = np.append(expected[keep], draws.size - expected[keep].sum())
+    statistic = ((cells_obs - cells_exp) ** 2 / cells_exp).sum()
+    dof = cells_obs.size - 1
+    assert statistic < dof + 6 * math.sqrt(2 * dof) + 10          # far beyond the 1e-4 quantile
+    assert (poisson_generation(0.0, locations=10, steps=10) == 0).all()
+
+
+@pytest.mark.parametrize("mean", [1e-300, 0.01, 0.1, 0.5, 3.0, 15.9, 16.5])
+def test_poisson_thresholds_give_the_inversions_count_exactly(mean):
+    parts, mu, e_mu = k.poisson_parts(mean)
+    levels = np.zeros(k.POISSON_LEVELS, dtype=np.int64)
+    k.poisson_levels(parts, mu, e_mu, levels)
+    bits = np.random.default_rng(3).integers(0, 2**53, 20_000)
+    edges = np.clip(np.concatenate([levels - 1, levels, levels + 1]), 0, 2**53 - 1)
+    lanes = generation_streams(1)
+    for draw in np.concatenate([bits, edges]):
+        u = float(draw) / 2**53
+        by_levels = int((draw > levels).sum())
+        if by_levels < k.POISSON_LEVELS:
+            assert by_levels == k.poisson(u, lanes.copy(), 0, parts, mu, e_mu)
+        else:
+            assert k.poisson(u, lanes.copy(), 0, parts, mu, e_mu) >= k.POISSON_LEVELS
+
+
+def test_bernoulli_thresholds_are_u_below_p_exactly():
+    for p in (0.0, 1e-300, 0.3, 0.5, 1.0 - 2**-53, 1.0):
+        below = math.ceil(p * 2**53)
+        for draw in {0, max(0, below - 1), below, min(2**53 - 1, below + 1), 2**53 - 1}:
+            assert (draw < below) == (draw / 2**53 < p)
 
 
 def test_bernoulli_and_poisson_generation_follow_the_true_rates():

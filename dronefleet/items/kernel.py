@@ -5,6 +5,10 @@ experiment): each trial seeds its own streams from its root seed, draws its worl
 t = 1..T in the order of the spec's section 8. State is a structure of plain arrays indexed by
 node (0 = home, 1..m = locations, row-major on the IDP grid) or robot (0..n-1).
 
+Compiled with ``error_model='numpy'``: a float division is then a plain IEEE division, not one
+guarded against a zero divisor (no kernel divides by zero), which lets the value loops vectorise;
+results are the same, IEEE division being exact-rounded either way.
+
 Only + - * / sqrt, floor/ceil and :mod:`dronefleet.fpmath` ``exp``/``log`` touch the trajectory;
 random numbers come from :mod:`dronefleet.rng` streams, so a run is bit-identical on any CPU.
 Streams per trial (spec section 10): ``STREAM_WORLD`` (a) positions then true parameters,
@@ -17,7 +21,7 @@ import numpy as np
 
 from ..fpmath import exp, log
 from ..jit import njit
-from ..rng import normal_pair, seed_stream, uniform
+from ..rng import lane_u64, normal_pair, seed_stream, uniform, unit
 
 # Modes, truths, algorithms, CAS variants (the ints the Python layer passes in ``opts``).
 MODE_FP, MODE_IDP = 0, 1
@@ -35,6 +39,9 @@ N_PARS = 14
 
 # Streams per trial: world (a), generation (b), then one per robot (c).
 STREAM_WORLD, STREAM_GENERATION, STREAM_ROBOT = 0, 1, 2
+# Key of location j's Bernoulli/Poisson generation stream: LOCATION_KEY + j (beyond every robot's key).
+LOCATION_KEY = 1 << 32
+UNIT_BITS = 9007199254740992.0   # 2**53: a uniform is k / 2**53, k the top 53 bits of a draw
 
 # Per-trial outputs (columns of ``totals``) and per-robot ones (last axis of ``per_robot``).
 T_GENERATED, T_SERVED, T_VISITS, T_TRIPS, T_PICKED = range(5)
@@ -47,6 +54,7 @@ TR_NODE, TR_DEST, TR_LEFT, TR_Y = range(4)
 STAY = -1
 TIE_REL = 1e-12            # A25: values within 1e-12 relative are equal
 TRAVEL_GUARD = 1e-9        # A6: ceil(D/s - 1e-9), float noise never adds a step
+POISSON_LEVELS = 4         # Poisson counts below 4 read from thresholds, in a loop that vectorises
 POISSON_CHUNK = 16.0       # Poisson(lambda) as a sum of ceil(lambda/16) inversions (exp(-16) >> underflow)
 NEVER = np.int64(1) << np.int64(62)   # "k = infinity" (ASTC), a sleeping step that never comes
 
@@ -54,7 +62,7 @@ NEVER = np.int64(1) << np.int64(62)   # "k = infinity" (ASTC), a sleeping step t
 # ------------------------------------------------------------------ samplers and geometry
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def poisson_parts(lam):
     """(parts, mean of a part, exp(-mean)) of Poisson(lam) drawn as a sum of inversions."""
     parts = max(1, int(np.ceil(lam / POISSON_CHUNK)))
@@ -62,13 +70,15 @@ def poisson_parts(lam):
     return parts, mu, exp(-mu)
 
 
-@njit(cache=True, inline='always')
-def poisson(rng, trial, stream, parts, mu, e_mu):
-    """Poisson(parts * mu) by inversion of each part: one uniform per part, a fixed number
-    per draw, so the stream stays aligned whatever the values; ``e_mu`` = exp(-mu)."""
+@njit(cache=True, error_model='numpy', inline='always')
+def poisson(u, lanes, j, parts, mu, e_mu):
+    """Poisson(parts * mu) by inversion of each part (k = 0, p = exp(-mu), F = p; while u > F:
+    k += 1, p *= mu / k, F += p): the first part from the uniform ``u``, the others from
+    stream ``j`` of ``lanes`` (4, streams); ``e_mu`` = exp(-mu)."""
     total = 0
-    for _ in range(parts):
-        u = uniform(rng, trial, stream)
+    for part in range(parts):
+        if part > 0:
+            u = unit(lane_u64(lanes, j))
         k = 0
         p = e_mu
         cdf = p
@@ -80,7 +90,24 @@ def poisson(rng, trial, stream, parts, mu, e_mu):
     return total
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
+def poisson_levels(parts, mu, e_mu, out):
+    """``out[i]`` = floor(F_i 2**53) for i < POISSON_LEVELS, F_i the inversion's running sum
+    (:func:`poisson`, the same operations): a uniform k / 2**53 gives at least i + 1 arrivals
+    exactly when k > out[i]. -1 (every k exceeds it) when the inversion takes several parts."""
+    p = e_mu
+    cdf = p
+    for i in range(POISSON_LEVELS):
+        if i > 0:
+            if p <= 0.0:             # the inversion stops where p underflows: no level beyond
+                out[i] = NEVER
+                continue
+            p = p * mu / i
+            cdf += p
+        out[i] = int(np.floor(cdf * UNIT_BITS)) if parts == 1 else -1
+
+
+@njit(cache=True, error_model='numpy')
 def travel_time(ax, ay, bx, by, speed):
     """t(a, b) [steps] = max(1, ceil(D/s - 1e-9)) for distinct nodes (A6); 0 for the same node."""
     dx = ax - bx
@@ -89,9 +116,10 @@ def travel_time(ax, ay, bx, by, speed):
     return max(1, steps)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def travel_table(pos, speed, out):
-    """``out[a, b]`` = t(a, b) for nodes at ``pos`` (M1, 2); 0 on the diagonal."""
+    """``out[a, b]`` = t(a, b) [steps] for nodes at ``pos`` (M1, 2); 0 on the diagonal; ``out`` (M1, M1) is
+    float64 in the kernel (whole numbers, exact), so that the value loops vectorise."""
     m1 = pos.shape[0]
     for a in range(m1):
         out[a, a] = 0
@@ -101,7 +129,7 @@ def travel_table(pos, speed, out):
             out[b, a] = steps
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def predict(truth, rate, big_k, growth, observed, observed_at, tau):
     """D_hat_j(tau) from the model's (O_j, t_j) (section 5): linear for Bernoulli (p_hat) and
     Poisson (lam_hat), the closed-form logistic for logistic (A14, 0 if O_j = 0)."""
@@ -112,13 +140,13 @@ def predict(truth, rate, big_k, growth, observed, observed_at, tau):
     return observed + rate * (tau - observed_at)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def greater(u, w):
     """u > w by more than TIE_REL relative (A25): otherwise the two are equal."""
     return u > w and (u - w) > TIE_REL * max(abs(u), abs(w))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def astc_wait(big_k, growth, target, observed, observed_at, t, out_time):
     """ASTC's k: the smallest integer k >= 1 with D_hat_a(t + k + t(0, a)) >= target, from the
     closed form then checked against the prediction (7.6); NEVER if target >= K or O_a = 0."""
@@ -136,10 +164,49 @@ def astc_wait(big_k, growth, target, observed, observed_at, t, out_time):
     return k
 
 
+@njit(cache=True, error_model='numpy')
+def bernoulli_step(lanes, below, count):
+    """One step of Bernoulli generation at every location j >= 1 from its stream ``lanes[:, j]``:
+    an item when the draw's top 53 bits are below ``below[j]`` = ceil(p_j 2**53), i.e. u < p_j.
+    Adds to ``count`` (M1,) and returns the items generated. Not inlined: alone, the loop vectorises."""
+    generated = 0
+    for j in range(1, count.shape[0]):
+        item = np.int64(np.int64(lane_u64(lanes, j) >> np.uint64(11)) < below[j])
+        count[j] += item
+        generated += item
+    return generated
+
+
+@njit(cache=True, error_model='numpy')
+def poisson_step(lanes, levels, count, draws, parts, part_mean, part_exp):
+    """One step of Poisson generation at every location j >= 1 from its stream ``lanes[:, j]``: the
+    inversion's count read from the thresholds ``levels`` (POISSON_LEVELS, M1) of
+    :func:`poisson_levels`, and where the draw exceeds the last one (rarely), the inversion itself
+    (:func:`poisson`). ``draws`` (M1,) is scratch. Adds to ``count`` and returns the arrivals.
+    Not inlined: alone, the loop vectorises."""
+    level0, level1, level2, level3 = levels[0], levels[1], levels[2], levels[3]
+    generated = 0
+    tail = False
+    for j in range(1, count.shape[0]):
+        k = np.int64(lane_u64(lanes, j) >> np.uint64(11))
+        arrivals = np.int64(k > level0[j]) + np.int64(k > level1[j]) + np.int64(k > level2[j]) + np.int64(k > level3[j])
+        count[j] += arrivals
+        generated += arrivals
+        tail |= k > level3[j]
+        draws[j] = k
+    if tail:
+        for j in range(1, count.shape[0]):
+            if draws[j] > level3[j]:         # the inversion's count replaces the levels'
+                arrivals = poisson(draws[j] / UNIT_BITS, lanes, j, parts[j], part_mean[j], part_exp[j]) - POISSON_LEVELS
+                count[j] += arrivals
+                generated += arrivals
+    return generated
+
+
 # ------------------------------------------------------------------ decisions (section 7)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def earmarks(node, dest, y, capacity, out):
     """``out[b]`` = sum of c - y_r over the robots heading to location b (7.2, A27): in transit,
     its destination; at a node, the node itself until it re-decides; robots at home never count.
@@ -150,14 +217,14 @@ def earmarks(node, dest, y, capacity, out):
             out[b] += capacity - y[r]
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def clear_earmarks(node, dest, out):
     """Zero the entries :func:`earmarks` wrote."""
     for r in range(node.shape[0]):
         out[dest[r] if node[r] < 0 else node[r]] = 0.0
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def uniform_candidate(a, m, rng, stream):
     """A location 1..m other than ``a`` (0: home, every location is one), uniform; STAY if none."""
     count = m - 1 if a > 0 else m
@@ -169,7 +236,7 @@ def uniform_candidate(a, m, rng, stream):
     return b
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, assigned, owner, leave_at, rng,
            value):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
@@ -231,51 +298,62 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
         baseline, fallback = 0.0, STAY
     else:
         baseline, fallback = yi / travel[a, 0], 0
-    # Plain loops over every location, without branches (the compiler vectorises them): the
-    # expected count on arrival, then the value; then the best.
-    for b in range(1, m + 1):
-        value[b] = observed[row, b] + rate * (t + travel[a, b] - observed_at[row, b])
+    # One plain loop per rule over contiguous rows (the model's row, travel times from a, and from
+    # home, which by symmetry are those to home), without branches: the compiler vectorises it.
+    seen, seen_at, out, back = observed[row], observed_at[row], travel[a], travel[0]
     if truth == LOGISTIC:
         for b in range(1, m + 1):
-            value[b] = predict(truth, rate, big_k, growth, observed[row, b], observed_at[row, b], t + travel[a, b])
+            value[b] = predict(truth, rate, big_k, growth, seen[b], seen_at[b], t + out[b])
+    else:
+        for b in range(1, m + 1):
+            value[b] = seen[b] + rate * (t + out[b] - seen_at[b])
     if sweeper:
         if variant == CAS_RATE:
             for b in range(1, m + 1):
-                value[b] = value[b] / max(1, travel[a, b])     # b = a (0 steps) is never chosen
+                value[b] = value[b] / max(1, out[b])     # b = a (0 steps) is never chosen
+    elif algorithm == ALG_GR and not opts[O_GR_CAP_MAX]:
+        for b in range(1, m + 1):
+            value[b] = min(capacity, yi + max(0.0, value[b] - earmark[b])) / (out[b] + back[b])
+    elif algorithm == ALG_GR:                # the text's max (A1)
+        for b in range(1, m + 1):
+            value[b] = max(capacity, yi + max(0.0, value[b] - earmark[b])) / (out[b] + back[b])
     else:
         ear = 1.0 if algorithm != ALG_CAS else 0.0      # CAS gr_no_earmark: GRIC without ear-marks
         for b in range(1, m + 1):
-            value[b] = yi + max(0.0, value[b] - ear * earmark[b])
-        if algorithm == ALG_GR:
-            if opts[O_GR_CAP_MAX]:       # the text's max (A1)
-                for b in range(1, m + 1):
-                    value[b] = max(capacity, value[b])
-            else:
-                for b in range(1, m + 1):
-                    value[b] = min(capacity, value[b])
-        for b in range(1, m + 1):
-            value[b] = value[b] / (travel[a, b] + travel[b, 0])
+            value[b] = (yi + max(0.0, value[b] - ear * earmark[b])) / (out[b] + back[b])
     return best_of(a, m, value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True, error_model='numpy', inline='always')
 def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
     """The location b != a of greatest ``value[b]`` (>= 0) if it beats ``baseline`` by more than
     TIE_REL (the baseline keeps ties), else ``fallback``. Values within TIE_REL of the greatest
-    tie (A25): the shorter t(a, b) wins, then a uniform choice by one-pass reservoir sampling in
-    index order (one draw per tied location after the first); or, with ``lowest_index``, the
-    lowest index whatever the travel time."""
-    top = -1.0
-    for b in range(1, m + 1):
-        if b != a and value[b] > top:
-            top = value[b]
+    tie (A25): the shorter t(a, b) wins, then a uniform choice among the tied at that time, by
+    one draw (floor(u * ties), in index order) once they are counted; or, with
+    ``lowest_index``, the lowest index whatever the travel time. ``value`` is scratch: the
+    robot's own node is overwritten."""
+    if a > 0:
+        value[a] = -1.0                  # below every value: never the best, never tied
+    # the greatest value, in four independent running maxima (exact: max is associative)
+    top0 = top1 = top2 = top3 = -1.0
+    b = 1
+    while b + 3 <= m:
+        top0 = max(top0, value[b])
+        top1 = max(top1, value[b + 1])
+        top2 = max(top2, value[b + 2])
+        top3 = max(top3, value[b + 3])
+        b += 4
+    while b <= m:
+        top0 = max(top0, value[b])
+        b += 1
+    top = max(max(top0, top1), max(top2, top3))
     if not greater(top, baseline):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top
     best, best_time, ties = STAY, 0, 0
     for b in range(1, m + 1):
         v = value[b]
-        if b == a or v < near or greater(top, v) or not greater(v, baseline):
+        if v < near or greater(top, v) or not greater(v, baseline):
             continue
         time = travel[a, b]
         if best == STAY:
@@ -294,7 +372,7 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
 # ------------------------------------------------------------------ one trial
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, obs_real, truth, count,
                      population, observed, observed_at):
     """A7 (o > 0): at the end of step t every robot observes every location within ``reach`` of
@@ -322,7 +400,7 @@ def observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, o
 
 
 
-@njit(cache=True)
+@njit(cache=True, error_model='numpy')
 def draw_world(opts, pars, m, rng, pos, truth_par):
     """Stream (a) of a trial: FP positions (x then y per location, index order) if drawn, then
     the m normal deviates of the true parameters mean + sd z, clipped to [low, high] or redrawn
@@ -349,7 +427,7 @@ def draw_world(opts, pars, m, rng, pos, truth_par):
         truth_par[j] = min(max(value, low), high)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, error_model='numpy', nogil=True)
 def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace, trace_counts, stop):
     """Every trial of one configuration; results written into ``totals`` (trials, N_TOTALS) and
     ``per_robot`` (trials, n, N_PER_ROBOT), int64.
@@ -374,9 +452,16 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
 
     rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
     pos = grid_pos.copy()
-    travel = np.empty((m1, m1), dtype=np.int32)
+    travel = np.empty((m1, m1))     # float64: the value loops convert no integer
     travel_table(pos, pars[P_SPEED], travel)
     truth_par = given_par.copy()
+    lanes = np.zeros((4, m1), dtype=np.uint64)     # location j's generation stream in column j
+    # A draw's top 53 bits k give the uniform u = k / 2**53. Bernoulli: an item at j when
+    # k < ceil(p_j 2**53), i.e. u < p_j. Poisson: the inversion gives the smallest i with
+    # u <= F_i, i.e. k <= floor(F_i 2**53), so for i < POISSON_LEVELS the count is the number of
+    # levels whose threshold k exceeds; above the last one the inversion runs (rarely).
+    threshold = np.zeros((POISSON_LEVELS, m1), dtype=np.int64)
+    draws = np.zeros(m1, dtype=np.int64)
     parts = np.ones(m1, dtype=np.int64)
     part_mean = np.zeros(m1)
     part_exp = np.ones(m1)
@@ -407,9 +492,16 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
         draw_world(opts, pars, m, rng, pos, truth_par)
         if opts[O_DRAW_POSITIONS]:
             travel_table(pos, pars[P_SPEED], travel)
-        if truth == POISSON:
+        if truth != LOGISTIC:
             for j in range(1, m1):
-                parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
+                seed_stream(rng, 0, STREAM_GENERATION, seeds[tr], LOCATION_KEY + j)   # (unused: scratch)
+                for w in range(4):
+                    lanes[w, j] = rng[0, STREAM_GENERATION, w]
+                if truth == BERNOULLI:
+                    threshold[0, j] = int(np.ceil(truth_par[j] * UNIT_BITS))
+                else:
+                    parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
+                    poisson_levels(parts[j], part_mean[j], part_exp[j], threshold[:, j])
         count[:] = 0
         population[:] = x0
         observed[:, :] = x0 if truth == LOGISTIC else 0.0
@@ -445,17 +537,14 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
             if stop[0] != 0:
                 break
             if t > 0:
-                # 1. generation, every location in index order
-                for j in range(1, m1):
-                    if truth == BERNOULLI:
-                        if uniform(rng, 0, STREAM_GENERATION) < truth_par[j]:
-                            count[j] += 1
-                            generated += 1
-                    elif truth == POISSON:
-                        arrivals = poisson(rng, 0, STREAM_GENERATION, parts[j], part_mean[j], part_exp[j])
-                        count[j] += arrivals
-                        generated += arrivals
-                    else:
+                # 1. generation, every location; Bernoulli and Poisson from each location's own
+                # stream, in loops that vectorise (the inversion only where an arrival is due)
+                if truth == BERNOULLI:
+                    generated += bernoulli_step(lanes, threshold[0], count)
+                elif truth == POISSON:
+                    generated += poisson_step(lanes, threshold, count, draws, parts, part_mean, part_exp)
+                else:
+                    for j in range(1, m1):
                         if have:
                             z, have = spare, False
                         else:
@@ -520,7 +609,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                     node[i] = -1
                     origin[i] = a
                     dest[i] = b
-                    left[i] = travel[a, b]
+                    left[i] = int(travel[a, b])
             if reach > 0.0:
                 observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, opts[O_OBS_REAL], truth,
                                  count, population, observed, observed_at)

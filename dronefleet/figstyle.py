@@ -7,7 +7,7 @@ registered in pyplot's global state; they are drawn under matplotlib's default s
 :data:`RC`, whatever the user's matplotlibrc, and saved without dates or software versions,
 so the same table gives the same bytes in every format.
 
-Each winner rule and each replenishment strategy has one :class:`Style` in every figure:
+Each winner rule, replenishment strategy and items algorithm has one :class:`Style` in every figure:
 the study's colours (least_confident green, most_confident pink, random orange) from the
 Okabe-Ito palette, which stays distinct under the common colour-vision deficiencies, and a
 marker, line style and hatch of its own, so that lines and boxes stay apart in greyscale
@@ -54,6 +54,16 @@ RULE_STYLES = {
 STRATEGY_STYLES = {
     "fixed": Style(OKABE_ITO["blue"], "s", "-", "//"),
     "mobile": Style(OKABE_ITO["vermillion"], "o", "-", ""),
+}
+#: The items study's algorithms (Liemhetcharat et al.): one of the palette's colours each.
+ALGORITHM_STYLES = {
+    "R": Style(OKABE_ITO["orange"], "^", ":", ".."),
+    "GR": Style(OKABE_ITO["blue"], "o", "-", ""),
+    "GRIC": Style(OKABE_ITO["sky blue"], "D", "-.", "xx"),
+    "CAS": Style(OKABE_ITO["vermillion"], "s", "--", "//"),
+    "AS": Style(OKABE_ITO["bluish green"], "v", "-", "\\\\"),
+    "ASTC": Style(OKABE_ITO["reddish purple"], "P", "-.", "oo"),
+    "SF": Style(OKABE_ITO["black"], "X", (0, (1, 2)), "++"),
 }
 #: For names no table above knows (a plugin rule), in sorted order of those names.
 _OTHER_STYLES = (Style(OKABE_ITO["sky blue"], "P", (0, (3, 1, 1, 1, 1, 1)), "++"),

@@ -17,6 +17,9 @@ pytest.importorskip("matplotlib")
 
 ROOT = Path(__file__).resolve().parent.parent
 FORMATS = ("png", "pdf", "svg")
+#: The delivery and replenishment figures (the items study's are tested in test_items_study.py:
+#: their quick run alone takes minutes).
+FIGURES = (*reproduce.DELIVERY_FIGURES, *reproduce.REPLENISHMENT_FIGURES)
 DRAWINGS = {"fig16": ["fig16a", "fig16b", "fig16c"], "fig17": ["fig17"], "fig18": ["fig18"],
         "fig19": ["fig19a", "fig19b", "fig19c"], "fig20": ["fig20"],
         **{figure: [figure] for figure in reproduce.REPLENISHMENT_FIGURES}}
@@ -30,12 +33,12 @@ def quick(tmp_path_factory):
     """Every figure reproduced in quick mode once; the results root and what it printed."""
     results = tmp_path_factory.mktemp("reproduce")
     lines = []
-    drawn = reproduce.reproduce(reproduce.FIGURES, results, quick=True, jobs=2,
+    drawn = reproduce.reproduce(FIGURES, results, quick=True, jobs=2,
                                 log=lambda *a, **k: lines.append(" ".join(map(str, a))))
     return results / "quick", drawn, lines
 
 
-@pytest.mark.parametrize("figure", reproduce.FIGURES)
+@pytest.mark.parametrize("figure", FIGURES)
 def test_quick_mode_writes_non_empty_tables_and_figures_in_every_format(quick, figure):
     root, drawn, _ = quick
     for name in TABLES[figure]:
@@ -148,7 +151,7 @@ def test_redrawing_reads_only_the_parquet_tables(quick, monkeypatch):
     for paths in drawn.values():
         for path in paths:
             path.unlink()
-    assert cli.main(["reproduce", "all", "--quick", "--redraw", "--out", str(root.parent)]) == 0
+    assert cli.main(["reproduce", *FIGURES, "--quick", "--redraw", "--out", str(root.parent)]) == 0
     assert {path: path.read_bytes() for path in before} == before  # the same bytes again
 
 
@@ -158,7 +161,7 @@ def test_redraw_without_tables_says_what_to_run(tmp_path, capsys):
 
 
 def test_the_experiments_scripts_reach_the_same_command():
-    for figure in reproduce.FIGURES:
+    for figure in FIGURES:
         script = ROOT / "experiments" / f"{figure}.py"
         out = subprocess.run([sys.executable, str(script), "--help"], capture_output=True, text=True, check=True)
         assert "dronefleet reproduce" in out.stdout

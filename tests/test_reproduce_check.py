@@ -22,7 +22,11 @@ def snapshot(root):
     return {path: (path.stat().st_size, path.stat().st_mtime_ns) for path in root.rglob("*") if path.is_file()}
 
 
-@pytest.mark.parametrize("figure", reproduce.FIGURES)
+#: The figures committed under results/ (the items study's are not yet: test_items_study.py checks a fresh run).
+COMMITTED = (*reproduce.DELIVERY_FIGURES, *reproduce.REPLENISHMENT_FIGURES)
+
+
+@pytest.mark.parametrize("figure", COMMITTED)
 def test_committed_runs_of_each_figure_rerun_to_the_same_numbers(figure):
     before = snapshot(RESULTS)
     lines = []

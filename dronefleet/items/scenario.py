@@ -47,12 +47,12 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
-           "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable"]
+           "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable", "study"]
 
 NAME = "items"
 TABLES = ("summary", "robots")
-#: The study's figures come with its experiments (not yet).
-FIGURES: tuple[str, ...] = ()
+#: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.items.study`).
+FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
 SEED_KEY = "first_trial"
 SEEDS_REQUIRED = False
 
@@ -268,3 +268,10 @@ def check_replayable(config: Config) -> None:
     from .replay import check_replayable as check
 
     check(config)
+
+
+def study() -> Any:
+    """Figs 1-12 and the t-tests in ``dronefleet reproduce``: :mod:`dronefleet.items.study`."""
+    from . import study as figures
+
+    return figures

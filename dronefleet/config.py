@@ -181,6 +181,83 @@ def _suggest(word: str, candidates: Iterable[str]) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
+class Sections:
+    """The TOML sections of a scenario whose keys are unique across sections (``[run] trials``,
+    read back flat as ``trials``): key resolution, the flattening of a config file, and the
+    reading of defaults < file < ``--set``, shared by the replenishment and items configs.
+
+    ``name`` is the scenario's (a file's ``scenario = ...`` must name it); ``schema`` maps each
+    key to its :class:`dronefleet.contract.Field` (its ``section``)."""
+
+    def __init__(self, name: str, schema: Mapping[str, Any]) -> None:
+        self.name, self.schema = name, schema
+        self.keys: dict[str, tuple[str, ...]] = {}  # section -> its keys, in schema order
+        for key, field in schema.items():
+            self.keys[field.section] = self.keys.get(field.section, ()) + (key,)
+
+    def unknown_key(self, key: str, where: str = "") -> ConfigError:
+        schema = self.schema
+        return ConfigError(f"{where}unknown key {_show(key)}{_suggest(key.rpartition('.')[2], schema)}. "
+                           f"Allowed keys: {', '.join(f'{schema[k].section}.{k}' for k in schema)}")
+
+    def resolve_key(self, key: str) -> str:
+        """'section.key' or a bare key -> the key name."""
+        section, dot, name = key.rpartition(".")
+        if name not in self.schema or (dot and section != self.schema[name].section):
+            raise self.unknown_key(key)
+        return name
+
+    def flatten(self, document: Any, where: str | None = None, origin: dict | None = None) -> dict:
+        """``{scenario, section: {key: value}}`` -> flat ``{key: value}``, checking names; with
+        ``origin``, each key's source ``where`` is recorded there."""
+        pre = f"{where}: " if where else ""
+        if not isinstance(document, dict):
+            raise ConfigError(f"{pre}expected a table of sections, got {type(document).__name__}")
+        flat = {}
+        for section, table in document.items():
+            if section == SCENARIO_KEY:
+                if table != self.name:
+                    raise ConfigError(f"{pre}scenario = {_show(table)}, expected {self.name!r}")
+                continue
+            if section in self.schema:
+                raise ConfigError(f"{pre}key {section!r} is at the top level; put it in section "
+                                  f"[{self.schema[section].section}]", [section])
+            if section not in self.keys:
+                raise ConfigError(f"{pre}unknown section [{_name(section)}]{_suggest(section, self.keys)}. "
+                                  f"Allowed sections: {', '.join(self.keys)}")
+            if not isinstance(table, dict):
+                raise ConfigError(f"{pre}[{section}] must be a table of key = value, got {_show(table)}")
+            for key, value in table.items():
+                if key not in self.keys[section]:
+                    if key in self.schema:
+                        raise ConfigError(f"{pre}{section}.{key} belongs in [{self.schema[key].section}]", [key])
+                    raise self.unknown_key(f"{section}.{key}", pre)
+                flat[key] = value
+                if origin is not None and where:
+                    origin[key] = where
+        return flat
+
+    def read(self, defaults: Mapping[str, Any], path: str | os.PathLike | None,
+             overrides: Iterable[str]) -> tuple[dict[str, Any], dict[str, str]]:
+        """``(values, origin)``: ``defaults`` < the file at ``path`` < ``overrides`` (``"key=value"``,
+        in order, all parsed before the file is read), and where each value that is not a
+        default came from."""
+        parsed = [(_parse_override(o, self.resolve_key), o) for o in overrides]
+        values, origin = dict(defaults), {}
+        if path is not None:
+            values.update(self.flatten(read_toml(path)[1], str(path), origin))
+        for (name, value), text in parsed:
+            values[name] = value
+            origin[name] = f"--set {text}"
+        return values, origin
+
+
+def with_sources(error: ConfigError, origin: Mapping[str, str]) -> ConfigError:
+    """``error``, naming where its keys' values were set (``origin``: key -> file or ``--set``), if known."""
+    sources = list(dict.fromkeys(origin[k] for k in error.keys if k in origin))
+    return ConfigError(f"{error} (set in {'; '.join(sources)})", error.keys) if sources else error
+
+
 def _parse_override(text: Any, resolve: Callable[[str], str]) -> tuple[str, Any]:
     """'key=value' (a ``--set``) -> (parameter name by the scenario's ``resolve``, value); value read
     as TOML, else a bare string (``rule=random``)."""

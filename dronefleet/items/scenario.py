@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
+from ..config import SCENARIO_KEY, ConfigError, Sections, with_sources
 from ..contract import Field
 from .params import KEYS, Params, allowed, check
 from .simulate import robot_columns, summary_columns
@@ -58,10 +58,8 @@ SEEDS_REQUIRED = False
 
 SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, allowed(name), key.doc) for name, key in KEYS.items()}
 DEFAULTS: dict = {name: key.default for name, key in KEYS.items()}
-SECTIONS: dict[str, tuple[str, ...]] = {}
-for _key, _field in SCHEMA.items():
-    SECTIONS[_field.section] = SECTIONS.get(_field.section, ()) + (_key,)
-del _key, _field
+_SECTIONS = Sections(NAME, SCHEMA)
+SECTIONS: dict[str, tuple[str, ...]] = _SECTIONS.keys
 
 
 def _to_dict(params: Params) -> dict:
@@ -89,53 +87,10 @@ def _build(values: Mapping[str, Any], origin: Mapping[str, str]) -> Config:
     try:
         return Config(**{name: check(name, v) for name, v in values.items()}).validate()
     except ConfigError as e:
-        sources = list(dict.fromkeys(origin[k] for k in e.keys if k in origin))
-        if not sources:
-            raise
-        raise ConfigError(f"{e} (set in {'; '.join(sources)})", e.keys) from None
+        raise with_sources(e, origin) from None
 
 
-def _unknown_key(key: str, where: str = "") -> ConfigError:
-    return ConfigError(f"{where}unknown key {_show(key)}{_suggest(key.rpartition('.')[2], SCHEMA)}. "
-                       f"Allowed keys: {', '.join(f'{SCHEMA[k].section}.{k}' for k in SCHEMA)}")
-
-
-def resolve_key(key: str) -> str:
-    """'section.key' or a bare key -> the key name."""
-    section, dot, name = key.rpartition(".")
-    if name not in SCHEMA or (dot and section != SCHEMA[name].section):
-        raise _unknown_key(key)
-    return name
-
-
-def _flatten(document: Any, where: str | None = None, origin: dict | None = None) -> dict:
-    """``{scenario, section: {key: value}}`` -> flat ``{key: value}``, checking names."""
-    pre = f"{where}: " if where else ""
-    if not isinstance(document, dict):
-        raise ConfigError(f"{pre}expected a table of sections, got {type(document).__name__}")
-    flat = {}
-    for section, table in document.items():
-        if section == SCENARIO_KEY:
-            if table != NAME:
-                raise ConfigError(f"{pre}scenario = {_show(table)}, expected {NAME!r}")
-            continue
-        if section in SCHEMA:
-            raise ConfigError(f"{pre}key {section!r} is at the top level; put it in section "
-                              f"[{SCHEMA[section].section}]", [section])
-        if section not in SECTIONS:
-            raise ConfigError(f"{pre}unknown section [{_name(section)}]{_suggest(section, SECTIONS)}. "
-                              f"Allowed sections: {', '.join(SECTIONS)}")
-        if not isinstance(table, dict):
-            raise ConfigError(f"{pre}[{section}] must be a table of key = value, got {_show(table)}")
-        for key, v in table.items():
-            if key not in SECTIONS[section]:
-                if key in SCHEMA:
-                    raise ConfigError(f"{pre}{section}.{key} belongs in [{SCHEMA[key].section}]", [key])
-                raise _unknown_key(f"{section}.{key}", pre)
-            flat[key] = v
-            if origin is not None and where:
-                origin[key] = where
-    return flat
+resolve_key = _SECTIONS.resolve_key
 
 
 def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), seed: int | None = None) -> Config:
@@ -148,13 +103,7 @@ def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), s
         key), a malformed ``--set``, a wrong type, a value out of range, a combination the
         model does not define or a run too large (:meth:`Params.validate`).
     """
-    parsed = [(_parse_override(o, resolve_key), o) for o in overrides]
-    values, origin = dict(DEFAULTS), {}
-    if path is not None:
-        values.update(_flatten(read_toml(path)[1], str(path), origin))
-    for (name, v), text in parsed:
-        values[name] = v
-        origin[name] = f"--set {text}"
+    values, origin = _SECTIONS.read(DEFAULTS, path, overrides)
     if seed is not None:
         values["seed"] = seed
         origin["seed"] = "--seed"
@@ -169,7 +118,7 @@ def replace(config: Config, changes: Mapping[str, Any]) -> Config:
     """A validated copy of ``config`` with ``changes`` (``{key: value}``) applied, typed as in :func:`load`."""
     for name in changes:
         if name not in SCHEMA:
-            raise _unknown_key(str(name))
+            raise _SECTIONS.unknown_key(str(name))
     return _build({**{f.name: getattr(config, f.name) for f in fields(config)}, **changes}, {})
 
 
@@ -180,7 +129,7 @@ def replicates(config: Config) -> range:
 
 def config_from_dict(document: Mapping[str, Any]) -> Config:
     """:meth:`Config.to_dict`'s form (any subset of keys) -> Config."""
-    return _build({**DEFAULTS, **_flatten(document)}, {})
+    return _build({**DEFAULTS, **_SECTIONS.flatten(document)}, {})
 
 
 def read_config(path: str | os.PathLike) -> Config:

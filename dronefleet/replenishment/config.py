@@ -17,7 +17,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
+from ..config import SCENARIO_KEY, ConfigError, Sections, _show, _suggest, with_sources
 from ..contract import Field
 from .params import BASE_CAPACITY, UPPER_LIMITS, Params
 from .simulate import TRIAL_SEED_FACTOR
@@ -58,10 +58,8 @@ SCHEMA: dict[str, Field] = {
     "transfer_loss": Field("energy", "fraction", "[0, 1)",
                            "lambda: a worker receives (1 - lambda) of what a mobile charger gives"),
 }
-SECTIONS: dict[str, tuple[str, ...]] = {}
-for _key, _field in SCHEMA.items():
-    SECTIONS[_field.section] = SECTIONS.get(_field.section, ()) + (_key,)
-del _key, _field
+_SECTIONS = Sections(NAME, SCHEMA)
+SECTIONS: dict[str, tuple[str, ...]] = _SECTIONS.keys
 
 DEFAULTS: dict = {**{f.name: f.default for f in fields(Params)},
                   "strategy": "mobile", "n_chargers": 6, "first_trial": 1}
@@ -132,53 +130,10 @@ def _build(values, origin):
                               ["first_trial"])
         return Config(params, first)
     except ConfigError as e:
-        sources = list(dict.fromkeys(origin[k] for k in e.keys if k in origin))
-        if not sources:
-            raise
-        raise ConfigError(f"{e} (set in {'; '.join(sources)})", e.keys) from None
+        raise with_sources(e, origin) from None
 
 
-def _unknown_key(key, where=""):
-    return ConfigError(f"{where}unknown key {_show(key)}{_suggest(key.rpartition('.')[2], SCHEMA)}. "
-                       f"Allowed keys: {', '.join(f'{SCHEMA[k].section}.{k}' for k in SCHEMA)}")
-
-
-def resolve_key(key: str) -> str:
-    """'section.key' or a bare key -> the key name."""
-    section, dot, name = key.rpartition(".")
-    if name not in SCHEMA or (dot and section != SCHEMA[name].section):
-        raise _unknown_key(key)
-    return name
-
-
-def _flatten(document, where=None, origin=None):
-    """``{scenario, section: {key: value}}`` -> flat ``{key: value}``, checking names."""
-    pre = f"{where}: " if where else ""
-    if not isinstance(document, dict):
-        raise ConfigError(f"{pre}expected a table of sections, got {type(document).__name__}")
-    flat = {}
-    for section, table in document.items():
-        if section == SCENARIO_KEY:
-            if table != NAME:
-                raise ConfigError(f"{pre}scenario = {_show(table)}, expected {NAME!r}")
-            continue
-        if section in SCHEMA:
-            raise ConfigError(f"{pre}key {section!r} is at the top level; put it in section "
-                              f"[{SCHEMA[section].section}]", [section])
-        if section not in SECTIONS:
-            raise ConfigError(f"{pre}unknown section [{_name(section)}]{_suggest(section, SECTIONS)}. "
-                              f"Allowed sections: {', '.join(SECTIONS)}")
-        if not isinstance(table, dict):
-            raise ConfigError(f"{pre}[{section}] must be a table of key = value, got {_show(table)}")
-        for key, value in table.items():
-            if key not in SECTIONS[section]:
-                if key in SCHEMA:
-                    raise ConfigError(f"{pre}{section}.{key} belongs in [{SCHEMA[key].section}]", [key])
-                raise _unknown_key(f"{section}.{key}", pre)
-            flat[key] = value
-            if origin is not None and where:
-                origin[key] = where
-    return flat
+resolve_key = _SECTIONS.resolve_key
 
 
 def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), seed: int | None = None) -> Config:
@@ -195,13 +150,7 @@ def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), s
     if seed is not None:
         raise ConfigError(f"--seed does not apply to {NAME}: trial k uses seed {TRIAL_SEED_FACTOR} k; "
                           "choose the trials with --set first_trial=K --set trials=N")
-    parsed = [(_parse_override(o, resolve_key), o) for o in overrides]
-    values, origin = dict(DEFAULTS), {}
-    if path is not None:
-        values.update(_flatten(read_toml(path)[1], str(path), origin))
-    for (name, value), text in parsed:
-        values[name] = value
-        origin[name] = f"--set {text}"
+    values, origin = _SECTIONS.read(DEFAULTS, path, overrides)
     return _build(values, origin)
 
 
@@ -213,7 +162,7 @@ def replace(config: Config, changes: Mapping[str, Any]) -> Config:
     """A validated copy of ``config`` with ``changes`` (``{key: value}``) applied, typed as in :func:`load`."""
     for name in changes:
         if name not in SCHEMA:
-            raise _unknown_key(str(name))
+            raise _SECTIONS.unknown_key(str(name))
     return _build({**{name: config.value(name) for name in SCHEMA}, **changes}, {})
 
 
@@ -224,7 +173,7 @@ def replicates(config: Config) -> range:
 
 def config_from_dict(document: Mapping[str, Any]) -> Config:
     """:meth:`Config.to_dict`'s form (any subset of keys) -> Config."""
-    return _build({**DEFAULTS, **_flatten(document)}, {})
+    return _build({**DEFAULTS, **_SECTIONS.flatten(document)}, {})
 
 
 def read_config(path: str | os.PathLike) -> Config:

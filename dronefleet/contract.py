@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     import pyarrow
 
 __all__ = ["ENTRY_POINT_GROUP", "Field", "ScenarioContract", "REQUIRED", "OPTIONAL", "StudyContext", "FigureStudy",
-           "contract_problems"]
+           "contract_problems", "check_configurations"]
 
 #: Entry-point group of scenarios installed from other packages: name -> the scenario object.
 ENTRY_POINT_GROUP = "dronefleet.scenarios"
@@ -198,3 +198,22 @@ class FigureStudy(Protocol):
 
     def check(self, study: StudyContext, figure: str) -> list[str]:
         """Re-run a few of the figure's runs and compare them with its tables: the differences, one line each."""
+
+
+def check_configurations(table: pandas.DataFrame, columns: Iterable[str], path: Path, limit: int,
+                         validate: Callable[[dict[str, Any]], Any], label: Callable[[dict[str, Any]], str]) -> None:
+    """Hold each distinct configuration of a figure's table (its ``columns``, at most ``limit`` of
+    them) to a config file's rules: ``validate(values)`` raises ConfigError for one the model does
+    not allow. SweepError (one line) naming the file ``path`` and the configuration (``label``)
+    otherwise, so that a tampered table is refused before anything is drawn or run."""
+    from .config import ConfigError, SweepError
+
+    configs = table[list(columns)].drop_duplicates()
+    if len(configs) > limit:
+        raise SweepError(f"{path} holds {len(configs)} configurations; a figure's table holds at most {limit}")
+    for values in configs.to_dict("records"):
+        try:
+            validate(values)
+        except ConfigError as error:
+            raise SweepError(f"{path}: the configuration {label(values)} is not one the model allows: "
+                             f"{error}") from None

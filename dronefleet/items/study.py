@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..config import ConfigError, SweepError
-from ..contract import StudyContext
+from ..config import SweepError
+from ..contract import StudyContext, check_configurations
 from . import experiments
 from .experiments import CONFIG_COLUMNS, RESULT_COLUMNS, USES
 from .params import Params
@@ -234,17 +234,10 @@ def read_runs(study: StudyContext, figure: str) -> pd.DataFrame:
     configurations held to a config file's rules, so that a tampered table is one line naming
     the file and the configuration before anything is drawn or run."""
     runs = study.read_table(figure, "runs")
-    path = study.root / figure / "runs.parquet"
-    configs = runs[list(CONFIG_COLUMNS)].drop_duplicates()
-    if len(configs) > MAX_CONFIGURATIONS:
-        raise SweepError(f"{path} holds {len(configs)} configurations; a figure's table holds at most "
-                         f"{MAX_CONFIGURATIONS}")
-    for values in configs.to_dict("records"):
-        try:
-            Params(**{k: v.item() if hasattr(v, "item") else v for k, v in values.items()}).validate()
-        except ConfigError as error:
-            raise SweepError(f"{path}: the configuration algorithm={values['algorithm']!r}, "
-                             f"n_robots={values['n_robots']!r} is not one the model allows: {error}") from None
+    check_configurations(
+        runs, CONFIG_COLUMNS, study.root / figure / "runs.parquet", MAX_CONFIGURATIONS,
+        lambda values: Params(**{k: v.item() if hasattr(v, "item") else v for k, v in values.items()}).validate(),
+        lambda values: f"algorithm={values['algorithm']!r}, n_robots={values['n_robots']!r}")
     return runs
 
 

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import ConfigError, SweepError, _show
-from ..contract import StudyContext
+from ..contract import StudyContext, check_configurations
 from . import experiments
 from .experiments import CONFIG_COLUMNS, METRIC_COLUMNS
 from .config import config_from_dict, replace
@@ -117,17 +117,9 @@ def _read(study: StudyContext, figure: str, name: str) -> pd.DataFrame:
     configurations held to a config file's rules (a strategy, a number of chargers, a ratio the
     model allows), so a tampered table is one line naming it before anything is drawn or run."""
     table = study.read_table(figure, name)
-    path = study.root / figure / f"{name}.parquet"
-    configs = table[list(CONFIG_COLUMNS)].drop_duplicates()
-    if len(configs) > MAX_CONFIGURATIONS:
-        raise SweepError(f"{path} holds {len(configs)} configurations; a figure's table holds at most "
-                         f"{MAX_CONFIGURATIONS}")
-    for values in configs.to_dict("records"):
-        try:
-            replace(config_from_dict({}), values)
-        except ConfigError as error:
-            raise SweepError(f"{path}: the configuration strategy={values['strategy']!r} is not one the "
-                             f"model allows: {error}") from None
+    check_configurations(table, CONFIG_COLUMNS, study.root / figure / f"{name}.parquet", MAX_CONFIGURATIONS,
+                         lambda values: replace(config_from_dict({}), values),
+                         lambda values: f"strategy={values['strategy']!r}")
     return table
 
 

@@ -117,14 +117,17 @@ SYMMETRIC = [HOME, (0.5, 0.7), (0.5, 0.3), (0.9, 0.5)]
 
 
 def test_earmarks_count_robots_heading_to_a_location_and_at_it_never_at_home():
-    node = np.array([-1, 2, 0, -1, 2])      # in transit, at location 2, at home, in transit home, at 2
-    dest = np.array([1, 2, 0, 0, 2])
-    y = np.array([3, 4, 0, 1, 10])
     out = np.zeros(4)
-    k.earmarks(node, dest, y, 10, out)
-    assert out.tolist() == [0.0, 7.0, 6.0, 0.0]     # robot 4 (full) adds 0; home never counted
-    k.clear_earmarks(node, dest, out)
-    assert not out.any()
+    k.earmark_move(out, 10, 3, 0, 1)        # robot 0 heads from home to 1 with y = 3
+    k.earmark_move(out, 10, 4, 0, 2)        # robot 1 heads to 2 with y = 4 (and stands there)
+    k.earmark_move(out, 10, 1, 0, 1)        # robot 3 went to 1 with y = 1 ...
+    k.earmark_move(out, 10, 1, 1, 0)        # ... and heads home: it no longer counts at 1
+    k.earmark_move(out, 10, 10, 0, 2)       # robot 4, full, at 2: adds 0
+    assert out.tolist() == [0.0, 7.0, 6.0, 0.0]     # home never counted
+    k.earmark_move(out, 10, 3, 1, 0)
+    k.earmark_move(out, 10, 4, 2, 0)
+    k.earmark_move(out, 10, 10, 2, 0)
+    assert not out.any()                    # everyone home again: nothing ear-marked
 
 
 def test_gr_subtracts_earmarks_and_a_second_robot_goes_elsewhere():

@@ -207,21 +207,16 @@ def poisson_step(lanes, levels, count, draws, parts, part_mean, part_exp):
 
 
 @njit(cache=True, error_model='numpy', inline='always')
-def earmarks(node, dest, y, capacity, out):
-    """``out[b]`` = sum of c - y_r over the robots heading to location b (7.2, A27): in transit,
-    its destination; at a node, the node itself until it re-decides; robots at home never count.
-    ``out`` (M1,) is zero on entry; :func:`clear_earmarks` zeroes it again in O(n), not O(m)."""
-    for r in range(node.shape[0]):
-        b = dest[r] if node[r] < 0 else node[r]
-        if b > 0:
-            out[b] += capacity - y[r]
-
-
-@njit(cache=True, error_model='numpy', inline='always')
-def clear_earmarks(node, dest, out):
-    """Zero the entries :func:`earmarks` wrote."""
-    for r in range(node.shape[0]):
-        out[dest[r] if node[r] < 0 else node[r]] = 0.0
+def earmark_move(earmark, capacity, y, a, b):
+    """Keep ``earmark`` (M1,) = sum of c - y_r over the robots heading to each location (7.2,
+    A27: in transit, its destination; at a node, the node itself until it re-decides; home never
+    counts) as one robot with payload ``y`` turns from node ``a`` to ``b``. Updated at each change
+    instead of summed over the robots at every decision: whole numbers, so the sums are exact and
+    the same in any order."""
+    if a > 0:
+        earmark[a] -= capacity - y
+    if b > 0:
+        earmark[b] += capacity - y
 
 
 @njit(cache=True, error_model='numpy', inline='always')
@@ -243,7 +238,7 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
 
     ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model,
     of which the robot reads ``row``; ``earmark`` (M1,) sum of c - y_r over robots heading to each
-    node (:func:`earmarks`; the robot itself counts only at its own node, never a candidate);
+    node (:func:`earmark_move`; the robot itself counts only at its own node, never a candidate);
     ``y`` (n,) payloads; ``assigned`` (n,) AS/ASTC/SF locations (0: none); ``owner`` (M1,) the
     robot + 1 assigned to a location (0: none); ``leave_at`` (n,) SF's step to leave home; draws
     come from ``rng[0, STREAM_ROBOT + i]``; ``value`` (M1,) is scratch.
@@ -350,6 +345,16 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
     if not greater(top, baseline):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top
+    # Count the values from ``near`` up and sum their indices, in a loop without branches that
+    # vectorises: usually the top is alone there, and is the best with no draw. Otherwise the
+    # tie rules below, in index order, with the same draws.
+    within, where = 0, 0
+    for b in range(1, m + 1):
+        hit = value[b] >= near
+        within += hit
+        where += hit * b
+    if within == 1:
+        return where
     best, best_time, ties = STAY, 0, 0
     for b in range(1, m + 1):
         v = value[b]
@@ -507,6 +512,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
         observed[:, :] = x0 if truth == LOGISTIC else 0.0
         observed_at[:, :] = 0.0
         owner[:] = 0
+        earmark[:] = 0.0                 # every robot at home: nothing ear-marked
         node[:] = 0
         dest[:] = 0
         y[:] = 0
@@ -593,19 +599,19 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                         seen = count[a]
                     y[i] += k
                     picked += k
+                    if earmarking:
+                        earmark[a] -= k              # its c - y_i, still ear-marked at a, shrinks
                     if not foraging or opts[O_COUNT_PICKUP]:
                         served += k
                         per_robot[tr, i, R_ITEMS] += k
                     observed[row, a] = seen
                     observed_at[row, a] = t
                 arrived[i] = False
-                if earmarking:
-                    earmarks(node, dest, y, capacity, earmark)
                 b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
                            assigned, owner, leave_at, rng, value)
-                if earmarking:
-                    clear_earmarks(node, dest, earmark)
                 if b != STAY and b != a:
+                    if earmarking:
+                        earmark_move(earmark, capacity, y[i], a, b)
                     node[i] = -1
                     origin[i] = a
                     dest[i] = b

@@ -109,7 +109,8 @@ def decide(params, i, t, a, positions, observed, *, y=None, earmark=None, observ
     return k.decide(i, t, a, opts, pars, travel, np.asarray([observed], dtype=np.float64),
                     as_array(observed_at, (1, m1), np.float64).reshape(1, m1), 0,
                     as_array(earmark, m1, np.float64), as_array(y, n, np.int64), as_array(assigned, n, np.int64),
-                    as_array(owner, m1, np.int64), as_array(leave_at, n, np.int64), rng, np.zeros(m1))
+                    as_array(owner, m1, np.int64), as_array(leave_at, n, np.int64), rng, np.zeros(m1),
+                    np.zeros(m1, dtype=np.int64))
 
 
 # home, then two locations 2 steps from home (s = 0.1) on opposite sides, and a far one (4 steps)

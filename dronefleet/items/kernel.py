@@ -233,7 +233,7 @@ def uniform_candidate(a, m, rng, stream):
 
 @njit(cache=True, error_model='numpy', inline='always')
 def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, assigned, owner, leave_at, rng,
-           value):
+           value, near_top):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
 
     ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model,
@@ -241,7 +241,7 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
     node (:func:`earmark_move`; the robot itself counts only at its own node, never a candidate);
     ``y`` (n,) payloads; ``assigned`` (n,) AS/ASTC/SF locations (0: none); ``owner`` (M1,) the
     robot + 1 assigned to a location (0: none); ``leave_at`` (n,) SF's step to leave home; draws
-    come from ``rng[0, STREAM_ROBOT + i]``; ``value`` (M1,) is scratch.
+    come from ``rng[0, STREAM_ROBOT + i]``; ``value`` (M1,) float64 and ``near_top`` (M1,) int64 are scratch.
     """
     algorithm = opts[O_ALG]
     capacity = opts[O_CAPACITY]
@@ -316,17 +316,17 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
         ear = 1.0 if algorithm != ALG_CAS else 0.0      # CAS gr_no_earmark: GRIC without ear-marks
         for b in range(1, m + 1):
             value[b] = (yi + max(0.0, value[b] - ear * earmark[b])) / (out[b] + back[b])
-    return best_of(a, m, value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream)
+    return best_of(a, m, value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream, near_top)
 
 
 @njit(cache=True, error_model='numpy', inline='always')
-def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
+def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream, near_top):
     """The location b != a of greatest ``value[b]`` (>= 0) if it beats ``baseline`` by more than
     TIE_REL (the baseline keeps ties), else ``fallback``. Values within TIE_REL of the greatest
     tie (A25): the shorter t(a, b) wins, then a uniform choice among the tied at that time, by
     one draw (floor(u * ties), in index order) once they are counted; or, with
     ``lowest_index``, the lowest index whatever the travel time. ``value`` is scratch: the
-    robot's own node is overwritten."""
+    robot's own node is overwritten; so is ``near_top`` (M1,) int64."""
     if a > 0:
         value[a] = -1.0                  # below every value: never the best, never tied
     # the greatest value, in four independent running maxima (exact: max is associative)
@@ -346,8 +346,9 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top
     # Count the values from ``near`` up and sum their indices, in a loop without branches that
-    # vectorises: usually the top is alone there, and is the best with no draw. Otherwise the
-    # tie rules below, in index order, with the same draws.
+    # vectorises: usually the top is alone there, and is the best with no draw. Otherwise their
+    # indices, in order (again without branches, which the scattered ties would mispredict), go
+    # through the tie rules, with the same draws as a scan of every location.
     within, where = 0, 0
     for b in range(1, m + 1):
         hit = value[b] >= near
@@ -355,10 +356,15 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream):
         where += hit * b
     if within == 1:
         return where
-    best, best_time, ties = STAY, 0, 0
+    within = 0
     for b in range(1, m + 1):
+        near_top[within] = b
+        within += value[b] >= near
+    best, best_time, ties = STAY, 0, 0
+    for c in range(within):
+        b = near_top[c]
         v = value[b]
-        if v < near or greater(top, v) or not greater(v, baseline):
+        if greater(top, v) or not greater(v, baseline):
             continue
         time = travel[a, b]
         if best == STAY:
@@ -477,6 +483,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     observed_at = np.zeros((rows, m1))
     earmark = np.zeros(m1)
     value = np.zeros(m1)
+    near_top = np.zeros(m1, dtype=np.int64)
     owner = np.zeros(m1, dtype=np.int64)
     node = np.zeros(n, dtype=np.int64)
     dest = np.zeros(n, dtype=np.int64)
@@ -608,7 +615,7 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
                     observed_at[row, a] = t
                 arrived[i] = False
                 b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
-                           assigned, owner, leave_at, rng, value)
+                           assigned, owner, leave_at, rng, value, near_top)
                 if b != STAY and b != a:
                     if earmarking:
                         earmark_move(earmark, capacity, y[i], a, b)

@@ -141,6 +141,13 @@ def predict(truth, rate, big_k, growth, observed, observed_at, tau):
 
 
 @njit(cache=True, error_model='numpy', inline='always')
+def expected(predicted, value, seen, seen_at, rate, t, out, b):
+    """D_hat_b(t + out[b]) of location b: ``value[b]`` where a pass of :func:`predict` put it
+    (``predicted``), else the linear model's, the same operations as :func:`predict`."""
+    return value[b] if predicted else seen[b] + rate * (t + out[b] - seen_at[b])
+
+
+@njit(cache=True, error_model='numpy', inline='always')
 def greater(u, w):
     """u > w by more than TIE_REL relative (A25): otherwise the two are equal."""
     return u > w and (u - w) > TIE_REL * max(abs(u), abs(w))
@@ -295,27 +302,30 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
         baseline, fallback = yi / travel[a, 0], 0
     # One plain loop per rule over contiguous rows (the model's row, travel times from a, and from
     # home, which by symmetry are those to home), without branches: the compiler vectorises it.
+    # The predictions get a pass of their own only where they need one (the logistic closed form)
+    # or are the values (CAS max_expected); otherwise the rule's loop computes them as it goes.
     seen, seen_at, out, back = observed[row], observed_at[row], travel[a], travel[0]
-    if truth == LOGISTIC:
+    predicted = truth == LOGISTIC or (sweeper and variant != CAS_RATE)
+    if predicted:
         for b in range(1, m + 1):
             value[b] = predict(truth, rate, big_k, growth, seen[b], seen_at[b], t + out[b])
-    else:
-        for b in range(1, m + 1):
-            value[b] = seen[b] + rate * (t + out[b] - seen_at[b])
     if sweeper:
         if variant == CAS_RATE:
-            for b in range(1, m + 1):
-                value[b] = value[b] / max(1, out[b])     # b = a (0 steps) is never chosen
+            for b in range(1, m + 1):            # b = a (0 steps) is never chosen
+                value[b] = expected(predicted, value, seen, seen_at, rate, t, out, b) / max(1, out[b])
     elif algorithm == ALG_GR and not opts[O_GR_CAP_MAX]:
         for b in range(1, m + 1):
-            value[b] = min(capacity, yi + max(0.0, value[b] - earmark[b])) / (out[b] + back[b])
+            wanted = expected(predicted, value, seen, seen_at, rate, t, out, b) - earmark[b]
+            value[b] = min(capacity, yi + max(0.0, wanted)) / (out[b] + back[b])
     elif algorithm == ALG_GR:                # the text's max (A1)
         for b in range(1, m + 1):
-            value[b] = max(capacity, yi + max(0.0, value[b] - earmark[b])) / (out[b] + back[b])
+            wanted = expected(predicted, value, seen, seen_at, rate, t, out, b) - earmark[b]
+            value[b] = max(capacity, yi + max(0.0, wanted)) / (out[b] + back[b])
     else:
         ear = 1.0 if algorithm != ALG_CAS else 0.0      # CAS gr_no_earmark: GRIC without ear-marks
         for b in range(1, m + 1):
-            value[b] = (yi + max(0.0, value[b] - ear * earmark[b])) / (out[b] + back[b])
+            wanted = expected(predicted, value, seen, seen_at, rate, t, out, b) - ear * earmark[b]
+            value[b] = (yi + max(0.0, wanted)) / (out[b] + back[b])
     return best_of(a, m, value, baseline, fallback, travel, opts[O_TIES_LOWEST], rng, stream, near_top)
 
 

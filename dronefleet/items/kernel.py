@@ -355,20 +355,21 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream, 
     if not greater(top, baseline):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top
-    # Count the values from ``near`` up, sum their indices and find the last, in a loop without
-    # branches that vectorises: usually the top is alone there, and is the best with no draw.
-    # Otherwise their indices, in order (again without branches, which the scattered ties would
-    # mispredict), go through the tie rules, with the same draws as a scan of every location.
-    within, where, last = 0, 0, 0
+    # Count the values from ``near`` up, sum their indices and find the first and the last, in a
+    # loop without branches that vectorises: when the top is alone there, it is the best with no
+    # draw. Otherwise their indices, in order (again without branches, which the scattered ties
+    # would mispredict), go through the tie rules, with the same draws as a scan of every location.
+    within, where, first, last = 0, 0, m, 0
     for b in range(1, m + 1):
         hit = value[b] >= near
         within += hit
         where += hit * b
+        first = min(first, b + (1 - hit) * m)
         last = max(last, hit * b)
     if within == 1:
         return where
     within = 0
-    for b in range(1, last + 1):
+    for b in range(first, last + 1):
         near_top[within] = b
         within += value[b] >= near
     best, best_time, ties = STAY, 0, 0

@@ -864,8 +864,9 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
     failures = {}
     for finished, (run, error, crash) in enumerate(results, start=1):
         if crash is not None:
+            # one line: loky's message names the worker's exit code on a line of its own
             error = _record_failure(run, out, f"its worker died (killed, out of memory or crashed) while running it: "
-                                              f"{type(crash).__name__}: {crash}",
+                                              f"{type(crash).__name__}: {one_line(crash)}",
                                     "".join(traceback.format_exception(crash)))
         if error is not None:
             failures[run] = error

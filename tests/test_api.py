@@ -213,3 +213,28 @@ def test_import_loads_no_numerical_library_and_a_run_no_pandas_until_a_table_is_
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout.splitlines()[-1]) == [[], ["numpy", "pyarrow"], ["numpy", "pandas", "pyarrow"]]
 
+
+#: A sweep whose winner rule is defined in the script itself, on worker processes.
+RULE_IN_SCRIPT = """
+from numba import njit
+import dronefleet
+
+@njit(cache=False)
+def fullest(f, w_norm, soc, theta, rng):
+    return f >= 0.0, soc
+
+fullest.bids_on = "policy"
+try:
+    dronefleet.sweep({"rule": ["least_confident", "__main__:fullest"]}, seeds=[0], jobs=2,
+                     set={"horizon_weeks": 0.05, "n_uavs": 5})
+except dronefleet.config.ConfigError as error:
+    print(error)
+"""
+
+
+def test_a_plugin_in_the_calling_script_is_refused_before_a_sweep_with_workers(tmp_path):
+    # The workers never run the script: "__main__" there is not it. Said before any run, in one line.
+    done = run_python("script", RULE_IN_SCRIPT, tmp_path)
+    assert done.returncode == 0, done.stderr
+    message, = done.stdout.splitlines()
+    assert message.startswith("rule='__main__:fullest' ") and "jobs=1" in message

@@ -92,8 +92,8 @@ def _die_with_parent(parent):
     """End this worker when the process ``parent`` (its pid) that started it dies.
 
     A worker would otherwise outlive a sweep killed with SIGKILL (which no handler sees) and
-    go on running its run; the multiprocessing resource tracker, which the workers keep
-    alive by holding its pipe, then lives on too. Linux: the kernel sends SIGKILL at the
+    go on running its run; the resource trackers (multiprocessing's and loky's), which the
+    workers keep alive by holding their pipes, then live on too. Linux: the kernel sends SIGKILL at the
     parent's death (``prctl(PR_SET_PDEATHSIG)``); elsewhere a daemon thread polls the parent
     pid. A run killed in the middle leaves at most a hidden temporary file, as any kill does.
     """

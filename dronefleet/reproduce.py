@@ -333,9 +333,7 @@ def draw_fig16(study: Study, figure: str = "fig16") -> list[Path]:
 
     d = study.root / figure
     outcomes, backlog = _read(study, figure, "outcomes"), _read(study, figure, "backlog")
-    return [*figures.delivered_vs_delivery_time(outcomes, d / f"{figure}a"),
-            *figures.aborted_by_tau(outcomes, d / f"{figure}b"),
-            *figures.backlog_bars(backlog, d / f"{figure}c")]
+    return figures.rule_outcomes(outcomes, backlog, d / figure)
 
 
 def tidy_fig17(study: Study) -> None:

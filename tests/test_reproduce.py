@@ -20,8 +20,8 @@ FORMATS = ("png", "pdf", "svg")
 #: The delivery and replenishment figures (the items study's are tested in test_items_study.py:
 #: their quick run alone takes minutes).
 FIGURES = (*reproduce.DELIVERY_FIGURES, *reproduce.REPLENISHMENT_FIGURES)
-DRAWINGS = {"fig16": ["fig16a", "fig16b", "fig16c"], "fig17": ["fig17"], "fig18": ["fig18"],
-        "fig19": ["fig19a", "fig19b", "fig19c"], "fig20": ["fig20"],
+DRAWINGS = {"fig16": ["fig16"], "fig17": ["fig17"], "fig18": ["fig18"],
+        "fig19": ["fig19"], "fig20": ["fig20"],
         **{figure: [figure] for figure in reproduce.REPLENISHMENT_FIGURES}}
 TABLES = {"fig16": ["outcomes", "backlog"], "fig17": ["accuracy"], "fig18": ["winner_soh"],
           "fig19": ["thresholds", "outcomes", "backlog"], "fig20": ["pending"],

@@ -26,7 +26,7 @@ from collections.abc import Iterable, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from types import ModuleType
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 DPI = 150
 #: Widths (in) of a figure that fills one journal column, or both (the page's text width).
@@ -134,9 +134,10 @@ def figure_paths(path: str | os.PathLike) -> list[Path]:
     return [path.with_suffix(f".{suffix}") for suffix in FORMATS]
 
 
-def letter_panels(axes) -> None:
-    """Letter the panels ``axes`` (a), (b), ... in this order: bold, just above each one's
-    upper left corner, outside the data."""
+def letter_panels(axes: Iterable[Any]) -> None:
+    """Letter the panels ``axes`` (matplotlib Axes, in the order their caption names them) (a),
+    (b), ...: bold, :data:`PANEL_LETTER_SIZE` pt, just above each one's upper left corner,
+    outside the data."""
     for letter, ax in zip(string.ascii_lowercase, axes):
         ax.annotate(f"({letter})", (0.0, 1.0), xycoords="axes fraction", xytext=(-2.0, 5.0),
                     textcoords="offset points", ha="right", va="bottom", fontsize=PANEL_LETTER_SIZE,

@@ -83,10 +83,7 @@ def run(args: argparse.Namespace) -> int:
         return run_scenario(scenario, args)
     overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
     config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
-    if args.replay:
-        from .delivery.replay import check_replayable
-
-        check_replayable(config)
+    _check_replay(scenario, config, args)
     name = Path(args.config).stem if args.config else "paper"
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 
@@ -133,13 +130,21 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_replay(scenario: scenarios.Scenario, config: Any, args: argparse.Namespace) -> None:
+    """``run --replay [--trial K]``: refuse, before the run, a page that would be refused after it."""
+    if args.trial is not None and not args.replay:
+        raise ConfigError(f"--trial {args.trial} chooses the trial of the replay page: give it with --replay")
+    if args.replay:
+        scenario.check_replayable(config, args.trial)
+
+
 def _write_replay(args, out):
-    """``run --replay``: the replay page beside the run's tables."""
+    """``run --replay``: the replay page beside the run's tables (of trial ``--trial``, if given)."""
     if args.replay:
         from . import replay
         from .records import REPLAY_FILE
 
-        log.info(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE)}")
+        log.info(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE, args.trial)}")
 
 
 def replay_command(args: argparse.Namespace) -> int:
@@ -160,8 +165,7 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
         if value:
             raise ConfigError(f"{flag} applies to delivery runs only, not to scenario {scenario.name!r}")
     config = scenario.load(args.config, args.set, args.seed)
-    if args.replay:
-        scenario.check_replayable(config)
+    _check_replay(scenario, config, args)
     name = Path(args.config).stem
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config, scenario.label(config))
     check_outputs(out, None, args.overwrite, scenario.tables)
@@ -287,6 +291,8 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.add_argument("--replay", action="store_true",
                    help="also write replay.html beside the tables: a page that plays the run in a browser")
+    p.add_argument("--trial", type=_at_least(1), metavar="K",
+                   help="with --replay: the trial the page plays, of a run holding several (default: its first)")
     p.set_defaults(func=run)
     p = commands.add_parser("replay", help="write a run's replay page: one self-contained HTML file",
                             description="A page that plays a run folder in any browser, offline: delivery "

@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 from .config import SCENARIO_KEY, ConfigError, _show, _suggest, read_toml
 from .contract import ENTRY_POINT_GROUP, FigureStudy, Field, contract_problems
 from .plugins import importing
+from .records import check_trial
 
 if TYPE_CHECKING:
     import pyarrow
@@ -139,13 +140,20 @@ class Scenario:
         replay_data = self._replay_data()
         if trial is None:
             return replay_data(run_dir)
-        if not hasattr(self.module, "replicates"):
-            raise ConfigError(f"--trial {trial}: a {self.name} run is one replicate, it has no trials to choose")
+        self._check_has_trials(trial)
         return replay_data(run_dir, trial)
 
-    def check_replayable(self, config: Any) -> None:
-        """ConfigError (one line) if the replay page of a run of ``config`` would be refused."""
+    def _check_has_trials(self, trial: int) -> None:
+        if not hasattr(self.module, "replicates"):
+            raise ConfigError(f"--trial {trial}: a {self.name} run is one replicate, it has no trials to choose")
+
+    def check_replayable(self, config: Any, trial: int | None = None) -> None:
+        """ConfigError (one line) if the replay page of a run of ``config`` (of its trial
+        ``trial``; None: its first) would be refused: asked before the run."""
         self._replay_data()
+        if trial is not None:
+            self._check_has_trials(trial)
+            check_trial(trial, self.replicates(config), "the run")
         check = getattr(self.module, "check_replayable", None)
         if check is not None:
             check(config)

@@ -27,7 +27,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
            "replace", "value", "read_config", "table_schemas", "simulate", "outdated", "format_summary",
-           "format_metrics", "describe", "label", "replay_data"]
+           "format_metrics", "describe", "label", "replay_data", "check_replayable"]
 
 NAME = "delivery"
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
@@ -149,3 +149,10 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
     from .replay import replay_data as data
 
     return data(run_dir)
+
+
+def check_replayable(config: Config) -> None:
+    """Refuse ``run --replay`` of a run whose page would be too large (:mod:`dronefleet.delivery.replay`)."""
+    from .replay import check_replayable as check
+
+    check(config)

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
-from test_replay import _refused, chromium, counters, embedded, needs_chromium
+from test_replay import _refused, chart_of, chromium, counters, embedded, needs_chromium
 
 from dronefleet import cli
 from dronefleet.items import kernel as k
@@ -281,3 +281,8 @@ def test_the_page_plays_in_chromium_without_errors(name, runs, tmp_path):
     assert shown["step"] == str(steps)
     assert shown["foraged" if name == "logistic" else "served"] == f"{int(summary['served']):,}"
     assert shown["net growth (A19)" if name == "logistic" else "generated"] == f"{int(summary['generated']):,}"
+    # the side chart: the served share (logistic: foraged) over the steps, on labelled axes
+    axes, paths = chart_of(dom)
+    assert axes["x"][1] == ["step"] and axes["x"][0][0] == 0 and axes["x"][0][-1] <= steps
+    assert axes["y"][1] == ["foraged [items]" if name == "logistic" else "served [% of generated]"]
+    assert len(paths) == 1 and paths[0].count("M") == 1

@@ -1,7 +1,7 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
 [--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
 ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce FIGURE...|all [--quick]``, ``--list``;
-``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``.
+``dronefleet replay RUN_DIR|DATASET [--run KEY=VALUE ...] [--out FILE.html] [--trial K]``.
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery.
 ``-q`` prints warnings and errors only, ``-v`` adds debugging detail (before or after the command)."""
 
@@ -148,12 +148,21 @@ def _write_replay(args, out):
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``: the run's replay page (:mod:`dronefleet.replay`)."""
+    """``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``: the run's replay page;
+    ``dronefleet replay DATASET [--run KEY=VALUE ...]``: that of one run of a sweep's dataset
+    (:mod:`dronefleet.replay`)."""
     from . import replay
     from .records import REPLAY_FILE
 
-    out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
-    written = replay.write(args.run_dir, out, args.trial)
+    run_folder = (Path(args.run_dir) / "summary.parquet").exists()
+    if replay.is_dataset(args.run_dir) or (args.run is not None and not run_folder):
+        written = replay.write_dataset_run(args.run_dir, args.run or [], args.out, args.trial)
+    elif args.run is not None:
+        raise ConfigError(f"--run chooses a run of a sweep's dataset; {str(args.run_dir)!r} is a run folder "
+                          "itself: leave --run out")
+    else:
+        out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
+        written = replay.write(args.run_dir, out, args.trial)
     log.info(f"dronefleet replay: {written} ({written.stat().st_size / 1e6:.1f} MB)")
     return 0
 
@@ -295,10 +304,17 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
                    help="with --replay: the trial the page plays, of a run holding several (default: its first)")
     p.set_defaults(func=run)
     p = commands.add_parser("replay", help="write a run's replay page: one self-contained HTML file",
-                            description="A page that plays a run folder in any browser, offline: delivery "
-                                        "flights, or one trial's robots of a replenishment or items run.")
-    p.add_argument("run_dir", metavar="RUN_DIR", help="a run folder that dronefleet run wrote")
-    p.add_argument("--out", type=_path, metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
+                            description="A page that plays a run folder, or one run of a sweep's dataset, in any "
+                                        "browser, offline: delivery flights, or one trial's robots of a "
+                                        "replenishment or items run.")
+    p.add_argument("run_dir", metavar="RUN_DIR|DATASET",
+                   help="a run folder that dronefleet run wrote, or a sweep's dataset (<results>/<sweep name>)")
+    p.add_argument("--run", action="append", metavar="KEY=VALUE",
+                   help="the run of DATASET to play, by its grid values and seed, e.g. --run rule=random "
+                        "--run seed=3 (repeat for each key that tells its runs apart); a run whose tables were "
+                        "not kept is simulated again from its stored config and seed")
+    p.add_argument("--out", type=_path, metavar="FILE.html",
+                   help="the page to write (default: RUN_DIR/replay.html, DATASET/_replay/<run>.html)")
     p.add_argument("--trial", type=_at_least(1), metavar="K",
                    help="the trial to play, of a run holding several (default: its first)")
     p.set_defaults(func=replay_command)

@@ -981,6 +981,38 @@ def _done_runs(sweep: Sweep, out: Path) -> list[Run]:
     return done
 
 
+def dataset_runs(out: Path) -> list[Run]:
+    """The runs whose summary is in the dataset folder ``out`` (a sweep's output: no sweep file
+    needed), in partition order: each ``summary`` part's config, placed by the dataset's
+    partition keys (:data:`LAYOUT_FILE`). At most :data:`MAX_RUNS` are looked at.
+
+    SweepError (one line) if ``out`` holds no dataset, or runs of several scenarios; DataError
+    naming the part whose config cannot be read, or is not that of the folder it lies in.
+    """
+    from .records import read_config_dict
+
+    keys = _found_layout(out, ("summary",)) if out.is_dir() else None
+    if keys is None:
+        raise SweepError(f"{out} holds no sweep dataset: no {LAYOUT_FILE} and no summary/<key>=<value>/... "
+                         "folders (give the folder dronefleet sweep run wrote, <results>/<sweep name>)")
+    pattern = "/".join(f"{key}=*" for key in keys) + "/part-0.parquet"
+    runs, kinds = [], set()
+    for part in sorted((out / "summary").glob(pattern)):
+        if len(runs) == MAX_RUNS:
+            raise SweepError(f"{out} holds more than {MAX_RUNS:,} runs; a sweep holds at most {MAX_RUNS:,}")
+        name = read_config_dict(part, "part").get(SCENARIO_KEY, "delivery")
+        scenario = scenarios.get(name, f"part {str(part)!r}: ")
+        run = Run(scenario.read_config(part), keys, scenario)
+        if run.path(out, "summary") != part:
+            raise DataError(f"part {str(part)!r} holds the config of run {run.partition}, not of the folder it "
+                            "lies in: a part moved or tampered with")
+        runs.append(run)
+        kinds.add(scenario.name)
+    if len(kinds) > 1:
+        raise SweepError(f"{out} holds runs of several scenarios ({', '.join(sorted(kinds))}); a sweep has one")
+    return runs
+
+
 def _partition_schema(sweep: Sweep):
     """The partition keys of ``sweep`` as a pyarrow schema, each with its config type."""
     import pyarrow as pa

@@ -233,3 +233,24 @@ def test_ctrl_c_ends_in_one_line_with_the_outputs_absent(tmp_path, capsys, monke
     assert cli.main(["run", *SHORT, "--out", str(tmp_path / "out")]) == 130
     assert capsys.readouterr().err == "dronefleet: interrupted\n"
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["replay", "run", "--trial", "0"], "argument --trial: expected an integer >= 1"),
+    (["run", "--replay", "--trial", "x"], "argument --trial: expected an integer >= 1"),
+    (["replay", "ds", "--run"], "argument --run: expected one argument"),
+])
+def test_replay_options_with_bad_values_are_one_line_usage_errors(argv, fragment, capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.count("\n") == 1 and fragment in err, err
+
+
+def test_replay_help_names_the_dataset_run_and_the_trial(capsys):
+    for argv, options in ((["replay", "--help"], ("RUN_DIR|DATASET", "--run KEY=VALUE", "--trial K")),
+                          (["run", "--help"], ("--replay", "--trial K"))):
+        with pytest.raises(SystemExit):
+            cli.main(argv)
+        shown = capsys.readouterr().out
+        assert all(option in shown for option in options), shown

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from . import scenarios, sweeps
-from .config import SCENARIO_KEY, ConfigError, _show
+from .config import SCENARIO_KEY, ConfigError, _show, one_line
 from .datafiles import DataError, parquet_schema
 from .outputs import check_output_file, writing
 from .records import CONFIG_KEY, REPLAY_FILE, read_config_dict, run_dir_state, write_atomic, write_tables
@@ -146,63 +146,65 @@ def is_dataset(folder: str | os.PathLike) -> bool:
 
 
 def _shown_values(values) -> str:
+    """Distinct ``values`` (texts of folder names), each on one line and cut, the first :data:`SHOWN_VALUES`."""
     values = list(dict.fromkeys(values))
-    shown = ", ".join(_show(v) for v in values[:SHOWN_VALUES])
+    shown = ", ".join(_short(value) for value in values[:SHOWN_VALUES])
     return shown + (f", ... ({len(values)} values)" if len(values) > SHOWN_VALUES else "")
 
 
-def _matches(value: Any, text: str) -> bool:
-    """Whether a run's ``value`` is the one ``text`` names: the same text, or the same number
-    (``15`` names 15.0)."""
-    if str(value) == text:
+def _short(text: str) -> str:
+    text = one_line(text)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _matches(value: str, text: str) -> bool:
+    """Whether a run's ``value`` (as its path spells it) is the one ``text`` names: the same
+    text, or the same number (``15`` names ``15.0``)."""
+    if value == text:
         return True
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        try:
-            return float(text) == value
-        except ValueError:
-            return False
-    return False
+    try:
+        return float(value) == float(text)
+    except ValueError:
+        return False
 
 
-def select_run(runs: list[sweeps.Run], selection: list[str], dataset: Path) -> sweeps.Run:
-    """The one run of ``runs`` (:func:`dronefleet.sweeps.dataset_runs` of ``dataset``) whose
-    partition values the ``KEY=VALUE`` texts of ``selection`` name; ConfigError (one line)
-    listing what is allowed if a text is malformed or names another key, or if no run or
-    several runs match."""
-    if not runs:
+def select_run(dataset: Path, selection: list[str]) -> sweeps.Run:
+    """The one run of the sweep dataset ``dataset`` whose partition values the ``KEY=VALUE`` texts
+    of ``selection`` name (:func:`dronefleet.sweeps.dataset_parts`); ConfigError (one line)
+    listing what is allowed if a text is malformed or names another key, or if no run or several
+    runs match. Only the chosen run's part is read."""
+    keys, parts = sweeps.dataset_parts(dataset)
+    if not parts:
         raise ConfigError(f"no run of the dataset {dataset} is done: nothing to replay (dronefleet sweep run)")
-    keys, scenario = runs[0].keys, runs[0].scenario
-    chosen, given = runs, {}
+    chosen, given = parts, {}
     for text in selection:
         key, equals, value = text.partition("=")
+        key, value = key.strip(), value.strip()
         if not equals:
             raise ConfigError(f"--run {_show(text)}: expected KEY=VALUE, one of the keys {', '.join(keys)}, "
-                              f"e.g. --run {keys[0]}={runs[0].value(keys[0])}")
-        try:
-            name = scenario.resolve_key(key.strip())
-        except ConfigError:
-            name = key.strip()
+                              f"e.g. --run {keys[0]}={parts[0][0][keys[0]]}")
+        name = key if key in keys else key.rpartition(".")[2]  # section.key, as everywhere
         if name not in keys:
             raise ConfigError(f"--run {_show(text)}: the runs of the dataset {dataset} are told apart by "
                               f"{', '.join(keys)}; choose with those")
         if name in given:
-            raise ConfigError(f"--run {name} is given twice ({given[name]!r} and {value.strip()!r}); "
+            raise ConfigError(f"--run {name} is given twice ({_show(given[name])} and {_show(value)}); "
                               "give each key once")
-        given[name] = value.strip()
-        matching = [run for run in chosen if _matches(run.value(name), given[name])]
+        given[name] = value
+        matching = [(values, part) for values, part in chosen if _matches(values[name], value)]
         if not matching:
             among = "" if len(given) == 1 else " among the runs of " + ", ".join(
-                f"{k}={v}" for k, v in given.items() if k != name)
-            raise ConfigError(f"--run {name}={given[name]}: no run of the dataset {dataset} has it; allowed{among}: "
-                              f"{name} = {_shown_values(run.value(name) for run in chosen)}")
+                f"{k}={_short(v)}" for k, v in given.items() if k != name)
+            raise ConfigError(f"--run {name}={_short(value)}: no run of the dataset {dataset} has it; allowed{among}: "
+                              f"{name} = {_shown_values(values[name] for values, _ in chosen)}")
         chosen = matching
     if len(chosen) > 1:
-        open_keys = [key for key in keys if len({run.value(key) for run in chosen}) > 1]
-        choices = "; ".join(f"{key} = {_shown_values(run.value(key) for run in chosen)}" for key in open_keys)
-        which = f"--run {' --run '.join(f'{k}={v}' for k, v in given.items())} matches" if given else "it holds"
+        open_keys = [key for key in keys if len({values[key] for values, _ in chosen}) > 1]
+        choices = "; ".join(f"{key} = {_shown_values(values[key] for values, _ in chosen)}" for key in open_keys)
+        which = f"--run {' --run '.join(f'{k}={_short(v)}' for k, v in given.items())} matches" if given else "it holds"
         raise ConfigError(f"the dataset {dataset}: {which} {len(chosen)} runs; choose one with --run KEY=VALUE "
                           f"for {', '.join(open_keys)} ({choices})")
-    return chosen[0]
+    return sweeps.dataset_run(dataset, keys, chosen[0][1])
 
 
 def _run_folder(run: sweeps.Run, dataset: Path, folder: Path) -> Path:
@@ -245,7 +247,7 @@ def write_dataset_run(dataset: str | os.PathLike, selection: list[str], out: str
     the scenario would refuse, or a damaged part (named).
     """
     dataset = Path(dataset)
-    run = select_run(sweeps.dataset_runs(dataset), selection, dataset)
+    run = select_run(dataset, selection)
     default = out is None
     out = dataset / DATASET_PAGES / f"{run.id}.html" if default else Path(out)
     inside = [table for table in run.scenario.tables if Path(os.path.abspath(out)).is_relative_to(

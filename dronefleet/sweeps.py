@@ -106,7 +106,7 @@ from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-from urllib.parse import quote
+from urllib.parse import quote, unquote
 
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, one_line, read_toml
@@ -981,36 +981,42 @@ def _done_runs(sweep: Sweep, out: Path) -> list[Run]:
     return done
 
 
-def dataset_runs(out: Path) -> list[Run]:
-    """The runs whose summary is in the dataset folder ``out`` (a sweep's output: no sweep file
-    needed), in partition order: each ``summary`` part's config, placed by the dataset's
-    partition keys (:data:`LAYOUT_FILE`). At most :data:`MAX_RUNS` are looked at.
+def dataset_parts(out: Path) -> tuple[tuple[str, ...], list[tuple[dict[str, str], Path]]]:
+    """The partition keys of the dataset folder ``out`` (a sweep's output: no sweep file needed)
+    and, for every run whose summary is there, its values as its path spells them (``{"rule":
+    "random", "seed": "3"}``, decoded) and its summary part; in path order, at most
+    :data:`MAX_RUNS`. Nothing is read but the folders: a damaged run elsewhere does not matter
+    (:func:`dataset_run` reads the one chosen).
 
-    SweepError (one line) if ``out`` holds no dataset, or runs of several scenarios; DataError
-    naming the part whose config cannot be read, or is not that of the folder it lies in.
+    SweepError (one line) if ``out`` holds no dataset, or more runs than a sweep may hold.
     """
-    from .records import read_config_dict
-
     keys = _found_layout(out, ("summary",)) if out.is_dir() else None
     if keys is None:
         raise SweepError(f"{out} holds no sweep dataset: no {LAYOUT_FILE} and no summary/<key>=<value>/... "
                          "folders (give the folder dronefleet sweep run wrote, <results>/<sweep name>)")
     pattern = "/".join(f"{key}=*" for key in keys) + "/part-0.parquet"
-    runs, kinds = [], set()
+    parts = []
     for part in sorted((out / "summary").glob(pattern)):
-        if len(runs) == MAX_RUNS:
+        if len(parts) == MAX_RUNS:
             raise SweepError(f"{out} holds more than {MAX_RUNS:,} runs; a sweep holds at most {MAX_RUNS:,}")
-        name = read_config_dict(part, "part").get(SCENARIO_KEY, "delivery")
-        scenario = scenarios.get(name, f"part {str(part)!r}: ")
-        run = Run(scenario.read_config(part), keys, scenario)
-        if run.path(out, "summary") != part:
-            raise DataError(f"part {str(part)!r} holds the config of run {run.partition}, not of the folder it "
-                            "lies in: a part moved or tampered with")
-        runs.append(run)
-        kinds.add(scenario.name)
-    if len(kinds) > 1:
-        raise SweepError(f"{out} holds runs of several scenarios ({', '.join(sorted(kinds))}); a sweep has one")
-    return runs
+        folders = part.relative_to(out / "summary").parts[:-1]
+        parts.append(({key: unquote(folder.split("=", 1)[1]) for key, folder in zip(keys, folders)}, part))
+    return keys, parts
+
+
+def dataset_run(out: Path, keys: tuple[str, ...], part: Path) -> Run:
+    """The run whose summary part in the dataset ``out`` (partitioned by ``keys``) is ``part``,
+    from the config the part holds; DataError naming the part if it cannot be read, holds no
+    valid config, or that of another run than the folder it lies in (moved, tampered with)."""
+    from .records import read_config_dict
+
+    name = read_config_dict(part, "part").get(SCENARIO_KEY, "delivery")
+    scenario = scenarios.get(name, f"part {str(part)!r}: ")
+    run = Run(scenario.read_config(part), keys, scenario)
+    if run.path(out, "summary") != part:
+        raise DataError(f"part {str(part)!r} holds the config of run {run.partition}, not of the folder it "
+                        "lies in: a part moved or tampered with")
+    return run
 
 
 def _partition_schema(sweep: Sweep):

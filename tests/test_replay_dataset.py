@@ -93,7 +93,7 @@ def test_a_damaged_part_is_named(dataset, capsys):
 
 
 @pytest.mark.parametrize("selection, fragment", [
-    ([], "it holds 4 runs; choose one with --run KEY=VALUE for rule, seed (rule = 'least_confident', 'random'; "
+    ([], "it holds 4 runs; choose one with --run KEY=VALUE for rule, seed (rule = least_confident, random; "
          "seed = 0, 1)"),
     (["--run", "rule=random"], "--run rule=random matches 2 runs; choose one with --run KEY=VALUE for seed "
                                "(seed = 0, 1)"),
@@ -134,3 +134,19 @@ def test_a_trial_of_a_replenishment_sweeps_run(tmp_path, capsys):
     assert "trial 2 of" in data["title"] and data["work"][-1] == summary.set_index("trial").loc[2, "work"]
     _refused(capsys, ["replay", str(dataset), "--run", "work_ratio=1", "--trial", "3", "--out", str(page)],
              "--trial 3: the run holds trials 1 to 2")
+
+
+def test_only_the_chosen_runs_part_is_read(dataset, capsys):
+    # another run's summary cut short: that run is not the one asked for
+    other = dataset / "summary" / "rule=random/seed=0/part-0.parquet"
+    other.write_bytes(other.read_bytes()[:50])
+    assert cli.main(["replay", str(dataset), *RUN]) == 0
+    _refused(capsys, ["replay", str(dataset), "--run", "rule=random", "--run", "seed=0"],
+             "rule=random/seed=0/part-0.parquet")
+
+
+def test_folder_names_are_shown_on_one_line(dataset, capsys):
+    odd = dataset / "summary" / "rule=a%0Ab%1B[31m" / "seed=0"
+    odd.mkdir(parents=True)
+    shutil.copy(dataset / "summary" / PART, odd / "part-0.parquet")
+    _refused(capsys, ["replay", str(dataset), "--run", "rule=x"], "rule = a b\\x1b[31m, least_confident, random")

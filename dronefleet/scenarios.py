@@ -40,7 +40,6 @@ from typing import TYPE_CHECKING, Any
 from .config import SCENARIO_KEY, ConfigError, _show, _suggest, read_toml
 from .contract import ENTRY_POINT_GROUP, FigureStudy, Field, contract_problems
 from .plugins import importing
-from .records import check_trial
 
 if TYPE_CHECKING:
     import pyarrow
@@ -152,6 +151,8 @@ class Scenario:
         ``trial``; None: its first) would be refused: asked before the run."""
         self._replay_data()
         if trial is not None:
+            from .records import check_trial  # not at the top: the registry imports no numpy until used
+
             self._check_has_trials(trial)
             check_trial(trial, self.replicates(config), "the run")
         check = getattr(self.module, "check_replayable", None)

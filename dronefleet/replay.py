@@ -100,9 +100,11 @@ def page(data: dict[str, Any], scene_script: str) -> str:
     return re.sub(r"/\*(?:DATA|SCENE)\*/", lambda match: parts.pop(match[0], match[0]), template)
 
 
-def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None = None) -> Path:
+def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None = None,
+          source: str | None = None) -> Path:
     """Write the replay page of the run in ``run_dir`` (of its trial ``trial`` if its runs hold
-    several; None: the first) to ``out`` (atomically); return ``out``.
+    several; None: the first) to ``out`` (atomically); return ``out``. ``source``, if given, says
+    where the run comes from (a sweep's run): the page's data holds it and its title ends with it.
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder, does not hold
     ``trial``, would make a page too large, or holds a
@@ -115,7 +117,10 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None 
     scenario = scenario_of_run(run_dir)
     _check_out(out, run_dir)
     # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it
-    html = page(scenario.replay_data(run_dir, trial), scenario.replay_script)
+    data = scenario.replay_data(run_dir, trial)
+    if source is not None:
+        data = {**data, "source": source, "title": f"{data['title']} ({source})"}
+    html = page(data, scenario.replay_script)
     with writing(out):
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))
 
@@ -264,7 +269,7 @@ def write_dataset_run(dataset: str | os.PathLike, selection: list[str], out: str
             with writing(out.parent):
                 out.parent.mkdir(exist_ok=True)
         try:
-            return write(run_dir, out, trial)
+            return write(run_dir, out, trial, f"sweep dataset {dataset.name}, run {run.partition}")
         except ConfigError as error:  # name the dataset's files, not the temporary folder's
             text = str(error)
             for table in run.scenario.tables:

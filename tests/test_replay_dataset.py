@@ -59,6 +59,7 @@ def test_a_run_is_chosen_by_its_grid_values_and_seed(dataset, capsys):
     assert str(page) in capsys.readouterr().out
     data = embedded(page)
     assert data["title"].startswith("delivery run: seed 1, rule random")
+    assert data["source"] == "sweep dataset ds, run rule=random/seed=1" and data["title"].endswith(f"({data['source']})")
     assert len(data["flights"]["takeoff_s"]) == pq.ParquetFile(dataset / "attempts" / PART).metadata.num_rows
     # a number names the value whatever its spelling, a key its section too
     assert cli.main(["replay", str(dataset), "--run", "auction.rule=random", "--run", "seed=1.0",
@@ -131,6 +132,7 @@ def test_a_trial_of_a_replenishment_sweeps_run(tmp_path, capsys):
     assert cli.main(["replay", str(dataset), "--run", "work_ratio=1", "--trial", "2", "--out", str(page)]) == 0
     data = embedded(page)
     summary = pq.read_table(dataset / "summary" / "work_ratio=1.0/first_trial=1/part-0.parquet").to_pandas()
+    assert data["source"] == "sweep dataset rs, run work_ratio=1.0/first_trial=1"
     assert "trial 2 of" in data["title"] and data["work"][-1] == summary.set_index("trial").loc[2, "work"]
     _refused(capsys, ["replay", str(dataset), "--run", "work_ratio=1", "--trial", "3", "--out", str(page)],
              "--trial 3: the run holds trials 1 to 2")

@@ -1,8 +1,9 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
-[--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
-``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce FIGURE...|all [--quick]``, ``--list``;
-``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``.
+[--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds [CONFIG] [--set key=value ...]``;
+``dronefleet configs``; ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce
+FIGURE...|all [--quick]``, ``--list``; ``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``.
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery.
+CONFIG and SWEEP are paths, or the names of shipped files (``replenishment``, ``rules``: ``dronefleet configs``).
 ``-q`` prints warnings and errors only, ``-v`` adds debugging detail (before or after the command)."""
 
 import argparse
@@ -17,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from . import console, provenance, scenarios, sweeps
-from .config import ConfigError, _show
+from .config import SHIPPED_FOLDERS, ConfigError, _show, named_file, shipped_config, shipped_files
 from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, check_output_file, probe_folders, writing
 
@@ -78,6 +79,8 @@ def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: I
 def run(args: argparse.Namespace) -> int:
     """``dronefleet run``: a delivery run here (fleet files, the bar in simulated weeks), any other
     scenario through :func:`run_scenario`; returns the exit code."""
+    if args.config is not None:
+        args.config = named_file(args.config)
     scenario = scenarios.scenario_of(args.config)
     if scenario.name != "delivery":
         return run_scenario(scenario, args)
@@ -184,7 +187,8 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
 
 
 def bounds(args: argparse.Namespace) -> int:
-    """``dronefleet bounds CONFIG``: the scenario's analytic bounds (docs/replenishment-model.md section 9)."""
+    """``dronefleet bounds [CONFIG]``: the scenario's analytic bounds (docs/replenishment-model.md section 9)."""
+    args.config = named_file(args.config)
     scenario, config = scenarios.load(args.config, args.set)
     if scenario.format_bounds is None:
         having = [s.name for s in scenarios.registered().values() if s.format_bounds is not None]
@@ -193,6 +197,18 @@ def bounds(args: argparse.Namespace) -> int:
     text = scenario.format_bounds(config)  # refuses parameters where a bound does not exist
     print(f"dronefleet bounds: {Path(args.config).stem}, {scenario.describe(config)}")
     print(text)
+    return 0
+
+
+def configs_command(args: argparse.Namespace) -> int:
+    """``dronefleet configs``: the shipped configs and sweep files, a line each, by the name commands take."""
+    for kind, heading in (("config", "configs: dronefleet run NAME, dronefleet bounds NAME"),
+                          ("sweep", "sweep files: dronefleet sweep plan|run|status|collect NAME")):
+        files = shipped_files(kind)
+        print(f"{heading} (in {shipped_config(*SHIPPED_FOLDERS[kind], next(iter(files)) + '.toml').parent})")
+        for name, description in files.items():
+            print(f"  {name:<22}{description}")
+    print("A path names a file first: a file of the working directory called like a shipped one is read instead.")
     return 0
 
 
@@ -268,8 +284,9 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
     p = commands.add_parser("run", help="simulate one run and write its tables as parquet")
-    p.add_argument("config", nargs="?", help="TOML config file, any scenario (default: the paper's delivery "
-                                             "scenario), e.g. configs/replenishment.toml")
+    p.add_argument("config", nargs="?", help="TOML config file, any scenario, or a shipped config's name "
+                                             "(dronefleet configs lists them), e.g. replenishment; default: "
+                                             "the paper's delivery scenario")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set tau_minutes=20 or --set auction.rule=random")
     p.add_argument("--seed", type=int, help="seed of the run (overrides run.seed)")
@@ -299,10 +316,16 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
                             description="Work and efficiency bounds of docs/replenishment-model.md section 9, both "
                                         "strategies; refused (exit 2) where a bound does not exist.")
-    p.add_argument("config", help="TOML config file with scenario = \"replenishment\"")
+    p.add_argument("config", nargs="?", default="replenishment",
+                   help="TOML config file with scenario = \"replenishment\", or a shipped config's name "
+                        "(default: replenishment, the shipped configs/replenishment.toml)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set transfer_loss=0.2 or --set energy.work_ratio=2")
     p.set_defaults(func=bounds)
+    p = commands.add_parser("configs", help="list the shipped configs and sweep files, by the names commands take",
+                            description="The configs and sweep files installed with dronefleet, a line each; "
+                                        "run, bounds and sweep take their names as well as paths.")
+    p.set_defaults(func=configs_command)
     _add_sweep_commands(commands)
     _add_reproduce_command(commands, reproduce_arguments)
     return parser
@@ -333,7 +356,8 @@ def _add_sweep_commands(commands):
                                  description="Grids of conditions times seeds; see the README, section Sweeps.")
     actions = parser.add_subparsers(dest="action", required=True)
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/rules.toml")
+    common.add_argument("sweep", help="sweep file (TOML), or a shipped sweep file's name (dronefleet configs "
+                                      "lists them), e.g. configs/sweeps/rules.toml or rules")
     common.add_argument("--results", type=_path, default="results", metavar="DIR",
                         help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
     p = actions.add_parser("plan", parents=[common], help="print the runs and tasks, write a SLURM job-array script")

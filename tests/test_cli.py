@@ -233,3 +233,66 @@ def test_ctrl_c_ends_in_one_line_with_the_outputs_absent(tmp_path, capsys, monke
     assert cli.main(["run", *SHORT, "--out", str(tmp_path / "out")]) == 130
     assert capsys.readouterr().err == "dronefleet: interrupted\n"
     assert not (tmp_path / "out").exists()
+
+
+# ---------------------------------------------------------------- shipped configs and sweep files by name
+
+
+def test_run_and_bounds_take_a_shipped_config_by_name_from_any_directory(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # away from the repository's configs/
+    assert cli.main(["run", "replenishment", "--set", "trials=1", "--set", "ticks=30", "--out", "r"]) == 0
+    config = json.loads(pq.read_schema(tmp_path / "r" / "summary.parquet").metadata[b"dronefleet.config"])
+    assert config["scenario"] == "replenishment" and config["run"]["ticks"] == 30
+    assert "dronefleet run: replenishment," in capsys.readouterr().out
+    assert cli.main(["bounds", "replenishment"]) == 0
+    assert capsys.readouterr().out.startswith("dronefleet bounds: replenishment,")
+
+
+def test_bounds_defaults_to_the_replenishment_config_and_its_e_cs_with_loss_is_positive(tmp_path, capsys,
+                                                                                       monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["bounds", "--set", "transfer_loss=0.6"]) == 0
+    (e_cs,) = [line.split()[1] for line in capsys.readouterr().out.splitlines() if line.split()[:1] == ["E_cs"]]
+    assert float(e_cs) == pytest.approx(0.3731, abs=5e-5)
+
+
+def test_a_path_wins_over_the_shipped_file_of_the_same_name(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replenishment").write_text('scenario = "replenishment"\n[run]\ntrials = 1\nticks = 20\n')
+    assert cli.main(["run", "replenishment", "--out", "r"]) == 0
+    config = json.loads(pq.read_schema(tmp_path / "r" / "summary.parquet").metadata[b"dronefleet.config"])
+    assert config["run"]["ticks"] == 20
+
+
+def test_sweep_commands_take_a_shipped_sweep_file_by_name(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["sweep", "plan", "smoke", "--results", "res"]) == 0
+    assert str(shipped_config("sweeps", "smoke.toml")) in (tmp_path / "res" / "smoke" / "smoke.sbatch").read_text()
+    capsys.readouterr()
+    assert cli.main(["sweep", "status", "rules", "--results", "res"]) == 1  # nothing run yet
+    assert capsys.readouterr().out.startswith("sweep rules: ")
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["run", "replenishmnt"], "'replenishmnt' is neither a file nor a shipped config (did you mean 'replenishment'?)"),
+    (["bounds", "papr"], "'papr' is neither a file nor a shipped config (did you mean 'paper'?)"),
+    (["sweep", "run", "rule"], "'rule' is neither a file nor a shipped sweep (did you mean 'rules'?)"),
+])
+def test_a_name_that_is_neither_a_file_nor_shipped_is_refused_listing_the_names(argv, named, tmp_path, capsys,
+                                                                               monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.err.startswith(f"dronefleet: error: {named}") and captured.err.count("\n") == 1
+    assert "replenishment" in captured.err and captured.out == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_configs_lists_every_shipped_config_and_sweep_file_with_a_description(capsys):
+    assert cli.main(["configs"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    folder = shipped_config("paper.toml").parent
+    for path in [*folder.glob("*.toml"), *folder.glob("sweeps/*.toml")]:
+        (line,) = [line for line in lines if line.split()[:1] == [path.stem]]
+        assert len(line.split()) > 2, line  # a description after the name
+    assert any(line.startswith("configs: ") and str(folder) in line for line in lines)

@@ -10,6 +10,7 @@ import argparse
 import hashlib
 import logging
 import os
+import re
 import stat
 import sys
 import time
@@ -105,13 +106,12 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(out, fleet_out, args.overwrite)
 
     log.info(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
-             f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
-             "(the first run on a machine compiles the engine, ~40 s)")
+             f"{console.counted(config.n_uavs, 'UAV')}, {console.counted(config.horizon_weeks, 'week')}")
     log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
     weeks = console.progress(config.horizon_weeks, "week", "  simulated")
     try:
-        with weeks:
+        with weeks, console.compile_notice("the delivery engine"):
             result = simulate(config, fleet=fleet,
                               progress=lambda t_s: weeks.update(t_s / SECONDS_PER_WEEK - weeks.n))
     except (SupervisorError, InvalidStateError, RunTooLargeError) as error:  # nothing written: tables come after
@@ -171,11 +171,11 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
 
     from .records import write_tables
 
-    log.info(f"dronefleet run: {name}, {scenario.describe(config)} "
-             "(the first run on a machine compiles the kernel, ~30 s)")
+    log.info(f"dronefleet run: {name}, {scenario.describe(config)}")
     log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
-    tables = scenario.simulate(config)
+    with console.compile_notice(f"the {scenario.name} kernel"):
+        tables = scenario.simulate(config)
     wall = time.perf_counter() - start
     with writing(out):
         write_tables(tables, out, config, overwrite=args.overwrite)
@@ -241,11 +241,34 @@ class _Commands(argparse._SubParsersAction):
                                                "(before the command or after it)")
 
 
+# reST in the docstrings and help texts shown by --help: ``literal`` and :role:`target` (~: its last name)
+_LITERAL = re.compile(r"``(.+?)``", re.DOTALL)  # a literal may span lines
+_ROLE = re.compile(r":[\w:.-]+:`(~?)([^`<]*?)\s*(?:<[^`>]*>)?`")
+
+
+def _plain(text: str) -> str:
+    """``text`` without reST markup: ``dronefleet run`` -> dronefleet run, :mod:`dronefleet.scenarios`
+    -> dronefleet.scenarios, :func:`~a.b` -> b."""
+    text = _ROLE.sub(lambda m: m[2].rsplit(".", 1)[-1] if m[1] else m[2], text)
+    return _LITERAL.sub(r"\1", text)
+
+
+class _Formatter(argparse.HelpFormatter):
+    """argparse's help with the docstrings' reST markup stripped (:func:`_plain`)."""
+
+    def _format_text(self, text):
+        return super()._format_text(_plain(text))
+
+    def _expand_help(self, action):
+        return _plain(super()._expand_help(action))
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with usage errors on one line, like every other refusal (exit code 2), and
-    subcommands (of any depth) that take ``-q``/``-v``."""
+    """argparse with usage errors on one line, like every other refusal (exit code 2), subcommands
+    (of any depth) that take ``-q``/``-v``, and help texts without reST markup."""
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
         super().__init__(*args, **kwargs)
         self.register("action", "parsers", _Commands)
 

@@ -1142,7 +1142,8 @@ def run_command(args: argparse.Namespace) -> int:
     log.debug(f"  sweep file {sweep.path}")
     start = time.perf_counter()
     try:
-        ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
+        with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # its first run runs here
+            ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
     except KeyboardInterrupt:
         log.warning(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
         return 130  # the shell's code for a command stopped by Ctrl-C

@@ -296,3 +296,42 @@ def test_configs_lists_every_shipped_config_and_sweep_file_with_a_description(ca
         (line,) = [line for line in lines if line.split()[:1] == [path.stem]]
         assert len(line.split()) > 2, line  # a description after the name
     assert any(line.startswith("configs: ") and str(folder) in line for line in lines)
+
+
+# ---------------------------------------------------------------- what the commands print
+
+
+@pytest.mark.parametrize("command", [[], ["run"], ["bounds"], ["configs"], ["sweep", "run"], ["replay"]])
+def test_help_shows_no_rest_markup(command, capsys):
+    with pytest.raises(SystemExit) as done:
+        cli.main([*command, "--help"])
+    assert done.value.code == 0
+    shown = capsys.readouterr().out
+    assert "usage: dronefleet" in shown
+    assert "``" not in shown and ":mod:`" not in shown and ":func:`" not in shown
+
+
+def test_a_cached_run_prints_no_compile_notice(tmp_path, capsys):
+    args = ["run", str(shipped_config("replenishment.toml")), "--set", "trials=1", "--set", "ticks=30"]
+    assert cli.main([*args, "--out", str(tmp_path / "first")]) == 0  # compiles if no cache has the kernel
+    capsys.readouterr()
+    assert cli.main([*args, "--out", str(tmp_path / "again")]) == 0
+    assert "compil" not in capsys.readouterr().out
+
+
+def test_one_of_a_thing_is_singular_and_the_backlog_age_says_it_is_a_sum(tmp_path, capsys):
+    assert cli.main(["run", "--set", "horizon_weeks=1", "--set", "n_uavs=1",
+                     "--out", str(tmp_path / "d")]) == 0
+    printed = capsys.readouterr().out
+    assert ", 1 UAV, 1 week" in printed.splitlines()[0]
+    (backlog,) = [line for line in printed.splitlines() if "backlog age" in line]
+    summary = pq.read_table(tmp_path / "d" / "summary.parquet").to_pylist()[0]
+    days, pending = summary["backlog_age_s"] / 86400.0, summary["pending"]
+    assert pending > 1  # one UAV cannot keep up with a week of orders
+    assert backlog.split(None, 3)[:3] == ["backlog", "age", "(summed)"]
+    assert f"{days:,.1f} days over {pending} pending order" in backlog
+    assert f"{days / pending:.1f} days each on average" in backlog
+    assert cli.main(["run", "replenishment", "--set", "n_workers=1", "--set", "n_chargers=1", "--set", "trials=1",
+                     "--set", "ticks=30", "--out", str(tmp_path / "r")]) == 0
+    printed = capsys.readouterr().out
+    assert "1 worker, 1 mobile charger (phi 2)" in printed and "over 1 trial " in printed

@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..console import counted
 from .bounds import (COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds,
                      fixed_work_ceiling)
 from .config import (DEFAULTS, NAME, SCHEMA, Config, config_from_dict, describe, label, load,
@@ -133,7 +134,7 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         note = None
     except BoundUndefinedError as error:
         beside, note = {}, f"no bound: {error}"
-    lines = [f"  {'over ' + str(summary.num_rows) + ' trials':<22}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
+    lines = [f"  {'over ' + counted(summary.num_rows, 'trial'):<22}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
              "   bound"]
     for text, column, fmt, bound in _SUMMARY_ROWS:
         x = np.array(summary.column(column).to_pylist(), dtype=np.float64)  # to_numpy imports pandas

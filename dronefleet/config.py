@@ -369,8 +369,9 @@ def named_file(text: str, kind: str = "config") -> str:
         return text
     names = shipped_files(kind)
     if text not in names:
-        raise ConfigError(f"{text!r} is neither a file nor a shipped {kind}{_suggest(text, names)}: the shipped "
-                          f"{kind}s are {', '.join(names)} (dronefleet configs describes them)")
+        what = {"config": "config", "sweep": "sweep file"}[kind]
+        raise ConfigError(f"{_show(text)} is neither a file nor a shipped {what}{_suggest(text, names)}: the shipped "
+                          f"{what}s are {', '.join(names)} (dronefleet configs describes them)")
     return str(shipped_config(*SHIPPED_FOLDERS[kind], f"{text}.toml"))
 
 

@@ -276,7 +276,7 @@ def test_sweep_commands_take_a_shipped_sweep_file_by_name(tmp_path, capsys, monk
 @pytest.mark.parametrize("argv, named", [
     (["run", "replenishmnt"], "'replenishmnt' is neither a file nor a shipped config (did you mean 'replenishment'?)"),
     (["bounds", "papr"], "'papr' is neither a file nor a shipped config (did you mean 'paper'?)"),
-    (["sweep", "run", "rule"], "'rule' is neither a file nor a shipped sweep (did you mean 'rules'?)"),
+    (["sweep", "run", "rule"], "'rule' is neither a file nor a shipped sweep file (did you mean 'rules'?)"),
 ])
 def test_a_name_that_is_neither_a_file_nor_shipped_is_refused_listing_the_names(argv, named, tmp_path, capsys,
                                                                                monkeypatch):
@@ -284,7 +284,7 @@ def test_a_name_that_is_neither_a_file_nor_shipped_is_refused_listing_the_names(
     assert cli.main(argv) == 2
     captured = capsys.readouterr()
     assert captured.err.startswith(f"dronefleet: error: {named}") and captured.err.count("\n") == 1
-    assert "replenishment" in captured.err and captured.out == ""
+    assert ("replenishment" if argv[0] != "sweep" else "replenishment-fig12") in captured.err and captured.out == ""
     assert list(tmp_path.iterdir()) == []
 
 

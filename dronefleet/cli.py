@@ -191,7 +191,7 @@ def bounds(args: argparse.Namespace) -> int:
     args.config = named_file(args.config)
     scenario, config = scenarios.load(args.config, args.set)
     if scenario.format_bounds is None:
-        having = [s.name for s in scenarios.registered().values() if s.format_bounds is not None]
+        having = [s.name for s in scenarios.loading().values() if s.format_bounds is not None]
         raise ConfigError(f"{args.config!r} is a {scenario.name} config: analytic bounds exist only for "
                           f"{', '.join(having)}")
     text = scenario.format_bounds(config)  # refuses parameters where a bound does not exist

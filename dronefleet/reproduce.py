@@ -458,7 +458,7 @@ def _studies(registry: Mapping[str, scenarios.Scenario]) -> dict[str, FigureStud
 def studies() -> dict[str, FigureStudy]:
     """Every study by its scenario's name, of every registered scenario (built-in, then installed).
     ConfigError if two name one figure."""
-    found = _studies(scenarios.registered())
+    found = _studies(scenarios.loading())
     owners = {}
     for name, study in found.items():
         for figure in study.FIGURES:

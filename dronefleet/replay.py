@@ -137,7 +137,7 @@ def _check_out(out: Path, run_dir: Path) -> None:
     # or pass for that run's page
     own_page = out.name == REPLAY_FILE and out.parent.resolve() == run_dir.resolve()
     if not own_page and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
-                            for s in scenarios.registered().values()):
+                            for s in scenarios.loading().values()):
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
 

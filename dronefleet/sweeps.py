@@ -109,7 +109,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote, unquote
 
 from . import console, scenarios
-from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, one_line, read_toml
+from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, named_file, one_line, read_toml
 from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
@@ -1112,7 +1112,7 @@ def rows(sweep: Sweep, out: str | os.PathLike, table: str, data: pyarrow.dataset
 
 
 def _open(args) -> tuple[Sweep, Path]:
-    sweep = load_sweep(args.sweep)
+    sweep = load_sweep(named_file(args.sweep, "sweep"))  # a path, or a shipped sweep file's name
     out = Path(args.results) / sweep.name
     check_layout(sweep, out)
     return sweep, out
@@ -1180,7 +1180,8 @@ def run_command(args: argparse.Namespace) -> int:
     log.debug(f"  sweep file {sweep.path}")
     start = time.perf_counter()
     try:
-        ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
+        with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # its first run runs here
+            ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
     except KeyboardInterrupt:
         log.warning(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
         return 130  # the shell's code for a command stopped by Ctrl-C

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 from . import scenarios
 from .config import ConfigError, _show, check_depth
 from .scenarios import Scenario
-from .sweeps import MAX_RUNS, available_cpus, collect, run_sweep, sweep_of_document
+from .sweeps import MAX_RUNS, Progress, available_cpus, collect, run_sweep, sweep_of_document
 
 if TYPE_CHECKING:
     import pandas
@@ -345,7 +345,8 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     planned = dataclasses.replace(planned, text=json.dumps(document, default=str))
     with tempfile.TemporaryDirectory(prefix="dronefleet-sweep-") as folder:
         out = Path(folder) / planned.name
-        _, failures = run_sweep(planned, out, planned.runs, jobs or available_cpus())
+        # a bar in a notebook; elsewhere as the caller's logging shows dronefleet's INFO lines
+        _, failures = run_sweep(planned, out, planned.runs, jobs or available_cpus(), progress=Progress())
         if failures:
             shown = "; ".join(f"{run.partition}: {error}" for run, error in list(failures.items())[:3])
             raise RuntimeError(f"{len(failures)} of {len(planned.runs)} runs failed: {shown}")

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 from . import scenarios
 from .config import ConfigError, _show, check_depth
 from .scenarios import Scenario
-from .sweeps import MAX_RUNS, available_cpus, collect, run_sweep, sweep_of_document
+from .sweeps import MAX_RUNS, Progress, available_cpus, collect, run_sweep, sweep_of_document
 
 if TYPE_CHECKING:
     import pandas
@@ -256,6 +256,20 @@ def _seed_list(seeds: Any) -> list:
     return _bounded_list(seeds, "seeds", "seeds")
 
 
+def _check_workers_can_import(document: dict) -> None:
+    """Refuse a plugin in the calling script (``"__main__:function"``) when a sweep has workers.
+
+    The workers import dronefleet and the modules a config names, never the caller's main
+    module (see :func:`dronefleet.executors.local`): there ``__main__`` is not the script.
+    """
+    tables = document["grid"] if isinstance(document["grid"], list) else [document["grid"]]
+    for key, value in itertools.chain(document["set"].items(), *(table.items() for table in tables)):
+        for one in value if isinstance(value, list) else [value]:
+            if isinstance(one, str) and one.partition(":")[0] == "__main__":
+                raise ConfigError(f"{key}={one!r} names the calling script, which the sweep's worker processes "
+                                  "do not run: put it in a module ('package.module:function') or pass jobs=1")
+
+
 def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds: Iterable[int] | None = None,
           base: str | os.PathLike | None = None, set: Mapping[str, Any] | None = None,
           jobs: int | None = None) -> pandas.DataFrame:
@@ -282,7 +296,9 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     set : dict, optional
         Fixed changes to ``base`` for every run (``[set]``), e.g. ``{"horizon_weeks": 1}``.
     jobs : int, optional
-        Processes of this machine to run on (default: every CPU this process may use).
+        Processes of this machine to run on (default: every CPU this process may use). The
+        workers never run the calling script, which needs no ``__name__ == "__main__"``
+        guard; a plugin defined in it (``rule="__main__:function"``) therefore needs ``jobs=1``.
 
     Returns
     -------
@@ -296,7 +312,7 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         (a ConfigError, a ValueError) Bad arguments: an unknown key, an empty grid, a value
         given twice, a key both in ``grid`` and ``set``, missing or repeated seeds, any
         value the scenario refuses (the message names the key, the grid point and what is
-        allowed); before anything runs.
+        allowed); a plugin of the calling script with workers; before anything runs.
     RuntimeError
         If a run failed while running (its error in the message).
 
@@ -322,11 +338,15 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         raise ConfigError(f"set={_show(set)}: expected a dict of config keys to values, e.g. {{'horizon_weeks': 1}}")
     document = {"sweep": head, "set": dict(set or {}), "grid": _grid(grid)}
     planned = sweep_of_document(document, Path(SWEEP_LABEL), "")
+    workers = jobs or available_cpus()
+    if workers > 1 and len(planned.runs) > 1:
+        _check_workers_can_import(document)
     # kept in collected.parquet; only now, when every key and value is known to be one a config holds
     planned = dataclasses.replace(planned, text=json.dumps(document, default=str))
     with tempfile.TemporaryDirectory(prefix="dronefleet-sweep-") as folder:
         out = Path(folder) / planned.name
-        _, failures = run_sweep(planned, out, planned.runs, jobs or available_cpus())
+        # a bar in a notebook; elsewhere as the caller's logging shows dronefleet's INFO lines
+        _, failures = run_sweep(planned, out, planned.runs, jobs or available_cpus(), progress=Progress())
         if failures:
             shown = "; ".join(f"{run.partition}: {error}" for run, error in list(failures.items())[:3])
             raise RuntimeError(f"{len(failures)} of {len(planned.runs)} runs failed: {shown}")

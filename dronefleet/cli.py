@@ -1,14 +1,17 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
-[--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds CONFIG [--set key=value ...]``;
-``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce FIGURE...|all [--quick]``, ``--list``;
-``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``.
+[--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds [CONFIG] [--set key=value ...]``;
+``dronefleet configs``; ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce
+FIGURE...|all [--quick]``, ``--list``; ``dronefleet replay RUN_DIR|DATASET [--run KEY=VALUE ...] [--out FILE.html]
+[--trial K]``.
 A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery.
+CONFIG and SWEEP are paths, or the names of shipped files (``replenishment``, ``rules``: ``dronefleet configs``).
 ``-q`` prints warnings and errors only, ``-v`` adds debugging detail (before or after the command)."""
 
 import argparse
 import hashlib
 import logging
 import os
+import re
 import stat
 import sys
 import time
@@ -17,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from . import console, provenance, scenarios, sweeps
-from .config import ConfigError, _show
+from .config import SHIPPED_FOLDERS, ConfigError, _show, named_file, shipped_config, shipped_files
 from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, check_output_file, probe_folders, writing
 
@@ -78,15 +81,14 @@ def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: I
 def run(args: argparse.Namespace) -> int:
     """``dronefleet run``: a delivery run here (fleet files, the bar in simulated weeks), any other
     scenario through :func:`run_scenario`; returns the exit code."""
+    if args.config is not None:
+        args.config = named_file(args.config)
     scenario = scenarios.scenario_of(args.config)
     if scenario.name != "delivery":
         return run_scenario(scenario, args)
     overrides = args.set + ([f"run.fleet_file={args.fleet}"] if args.fleet else [])
     config = load_config(args.config, overrides, args.seed)  # refuses bad input before any work
-    if args.replay:
-        from .delivery.replay import check_replayable
-
-        check_replayable(config)
+    _check_replay(scenario, config, args)
     name = Path(args.config).stem if args.config else "paper"
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config)
 
@@ -102,13 +104,12 @@ def run(args: argparse.Namespace) -> int:
     check_outputs(out, fleet_out, args.overwrite)
 
     log.info(f"dronefleet run: {name}, seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
-             f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks "
-             "(the first run on a machine compiles the engine, ~40 s)")
+             f"{console.counted(config.n_uavs, 'UAV')}, {console.counted(config.horizon_weeks, 'week')}")
     log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
     weeks = console.progress(config.horizon_weeks, "week", "  simulated")
     try:
-        with weeks:
+        with weeks, console.compile_notice("the delivery engine"):
             result = simulate(config, fleet=fleet,
                               progress=lambda t_s: weeks.update(t_s / SECONDS_PER_WEEK - weeks.n))
     except (SupervisorError, InvalidStateError, RunTooLargeError) as error:  # nothing written: tables come after
@@ -133,22 +134,39 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_replay(scenario: scenarios.Scenario, config: Any, args: argparse.Namespace) -> None:
+    """``run --replay [--trial K]``: refuse, before the run, a page that would be refused after it."""
+    if args.trial is not None and not args.replay:
+        raise ConfigError(f"--trial {args.trial} chooses the trial of the replay page: give it with --replay")
+    if args.replay:
+        scenario.check_replayable(config, args.trial)
+
+
 def _write_replay(args, out):
-    """``run --replay``: the replay page beside the run's tables."""
+    """``run --replay``: the replay page beside the run's tables (of trial ``--trial``, if given)."""
     if args.replay:
         from . import replay
         from .records import REPLAY_FILE
 
-        log.info(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE)}")
+        log.info(f"  {'replay':<22}{replay.write(out, out / REPLAY_FILE, args.trial)}")
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``: the run's replay page (:mod:`dronefleet.replay`)."""
+    """``dronefleet replay RUN_DIR [--out FILE.html] [--trial K]``: the run's replay page;
+    ``dronefleet replay DATASET [--run KEY=VALUE ...]``: that of one run of a sweep's dataset
+    (:mod:`dronefleet.replay`)."""
     from . import replay
     from .records import REPLAY_FILE
 
-    out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
-    written = replay.write(args.run_dir, out, args.trial)
+    run_folder = (Path(args.run_dir) / "summary.parquet").exists()
+    if replay.is_dataset(args.run_dir) or (args.run is not None and not run_folder):
+        written = replay.write_dataset_run(args.run_dir, args.run or [], args.out, args.trial)
+    elif args.run is not None:
+        raise ConfigError(f"--run chooses a run of a sweep's dataset; {str(args.run_dir)!r} is a run folder "
+                          "itself: leave --run out")
+    else:
+        out = Path(args.out) if args.out else Path(args.run_dir) / REPLAY_FILE
+        written = replay.write(args.run_dir, out, args.trial)
     log.info(f"dronefleet replay: {written} ({written.stat().st_size / 1e6:.1f} MB)")
     return 0
 
@@ -160,19 +178,18 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
         if value:
             raise ConfigError(f"{flag} applies to delivery runs only, not to scenario {scenario.name!r}")
     config = scenario.load(args.config, args.set, args.seed)
-    if args.replay:
-        scenario.check_replayable(config)
+    _check_replay(scenario, config, args)
     name = Path(args.config).stem
     out = Path(os.path.normpath(args.out)) if args.out else default_out(name, config, scenario.label(config))
     check_outputs(out, None, args.overwrite, scenario.tables)
 
     from .records import write_tables
 
-    log.info(f"dronefleet run: {name}, {scenario.describe(config)} "
-             "(the first run on a machine compiles the kernel, ~30 s)")
+    log.info(f"dronefleet run: {name}, {scenario.describe(config)}")
     log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
-    tables = scenario.simulate(config)
+    with console.compile_notice(f"the {scenario.name} kernel"):
+        tables = scenario.simulate(config)
     wall = time.perf_counter() - start
     with writing(out):
         write_tables(tables, out, config, overwrite=args.overwrite)
@@ -184,15 +201,28 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
 
 
 def bounds(args: argparse.Namespace) -> int:
-    """``dronefleet bounds CONFIG``: the scenario's analytic bounds (docs/replenishment-model.md section 9)."""
+    """``dronefleet bounds [CONFIG]``: the scenario's analytic bounds (docs/replenishment-model.md section 9)."""
+    args.config = named_file(args.config)
     scenario, config = scenarios.load(args.config, args.set)
     if scenario.format_bounds is None:
-        having = [s.name for s in scenarios.registered().values() if s.format_bounds is not None]
+        having = [s.name for s in scenarios.loading().values() if s.format_bounds is not None]
         raise ConfigError(f"{args.config!r} is a {scenario.name} config: analytic bounds exist only for "
                           f"{', '.join(having)}")
     text = scenario.format_bounds(config)  # refuses parameters where a bound does not exist
     print(f"dronefleet bounds: {Path(args.config).stem}, {scenario.describe(config)}")
     print(text)
+    return 0
+
+
+def configs_command(args: argparse.Namespace) -> int:
+    """``dronefleet configs``: the shipped configs and sweep files, a line each, by the name commands take."""
+    for kind, heading in (("config", "configs: dronefleet run NAME, dronefleet bounds NAME"),
+                          ("sweep", "sweep files: dronefleet sweep plan|run|status|collect NAME")):
+        files = shipped_files(kind)
+        print(f"{heading} (in {shipped_config(*SHIPPED_FOLDERS[kind], next(iter(files)) + '.toml').parent})")
+        for name, description in files.items():
+            print(f"  {name:<22}{description}")
+    print("A path names a file first: a file of the working directory called like a shipped one is read instead.")
     return 0
 
 
@@ -225,11 +255,34 @@ class _Commands(argparse._SubParsersAction):
                                                "(before the command or after it)")
 
 
+# reST in the docstrings and help texts shown by --help: ``literal`` and :role:`target` (~: its last name)
+_LITERAL = re.compile(r"``(.+?)``", re.DOTALL)  # a literal may span lines
+_ROLE = re.compile(r":[\w:.-]+:`(~?)([^`<]*?)\s*(?:<[^`>]*>)?`")
+
+
+def _plain(text: str) -> str:
+    """``text`` without reST markup: ``dronefleet run`` -> dronefleet run, :mod:`dronefleet.scenarios`
+    -> dronefleet.scenarios, :func:`~a.b` -> b."""
+    text = _ROLE.sub(lambda m: m[2].rsplit(".", 1)[-1] if m[1] else m[2], text)
+    return _LITERAL.sub(r"\1", text)
+
+
+class _Formatter(argparse.HelpFormatter):
+    """argparse's help with the docstrings' reST markup stripped (:func:`_plain`)."""
+
+    def _format_text(self, text):
+        return super()._format_text(_plain(text))
+
+    def _expand_help(self, action):
+        return _plain(super()._expand_help(action))
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with usage errors on one line, like every other refusal (exit code 2), and
-    subcommands (of any depth) that take ``-q``/``-v``."""
+    """argparse with usage errors on one line, like every other refusal (exit code 2), subcommands
+    (of any depth) that take ``-q``/``-v``, and help texts without reST markup."""
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
         super().__init__(*args, **kwargs)
         self.register("action", "parsers", _Commands)
 
@@ -268,8 +321,9 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     parser.add_argument("--version", action=_Version)
     commands = parser.add_subparsers(dest="command", required=True)
     p = commands.add_parser("run", help="simulate one run and write its tables as parquet")
-    p.add_argument("config", nargs="?", help="TOML config file, any scenario (default: the paper's delivery "
-                                             "scenario), e.g. configs/replenishment.toml")
+    p.add_argument("config", nargs="?", help="TOML config file, any scenario, or a shipped config's name "
+                                             "(dronefleet configs lists them), e.g. replenishment; default: "
+                                             "the paper's delivery scenario")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set tau_minutes=20 or --set auction.rule=random")
     p.add_argument("--seed", type=int, help="seed of the run (overrides run.seed)")
@@ -287,22 +341,37 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
                    help="save the fleet at the end of the run (parquet, '{seed}' is replaced by the seed)")
     p.add_argument("--replay", action="store_true",
                    help="also write replay.html beside the tables: a page that plays the run in a browser")
+    p.add_argument("--trial", type=_at_least(1), metavar="K",
+                   help="with --replay: the trial the page plays, of a run holding several (default: its first)")
     p.set_defaults(func=run)
     p = commands.add_parser("replay", help="write a run's replay page: one self-contained HTML file",
-                            description="A page that plays a run folder in any browser, offline: delivery "
-                                        "flights, or one trial's robots of a replenishment or items run.")
-    p.add_argument("run_dir", metavar="RUN_DIR", help="a run folder that dronefleet run wrote")
-    p.add_argument("--out", type=_path, metavar="FILE.html", help="the page to write (default: RUN_DIR/replay.html)")
+                            description="A page that plays a run folder, or one run of a sweep's dataset, in any "
+                                        "browser, offline: delivery flights, or one trial's robots of a "
+                                        "replenishment or items run.")
+    p.add_argument("run_dir", metavar="RUN_DIR|DATASET",
+                   help="a run folder that dronefleet run wrote, or a sweep's dataset (<results>/<sweep name>)")
+    p.add_argument("--run", action="append", metavar="KEY=VALUE",
+                   help="the run of DATASET to play, by its grid values and seed, e.g. --run rule=random "
+                        "--run seed=3 (repeat for each key that tells its runs apart); a run whose tables were "
+                        "not kept is simulated again from its stored config and seed")
+    p.add_argument("--out", type=_path, metavar="FILE.html",
+                   help="the page to write (default: RUN_DIR/replay.html, DATASET/_replay/<run>.html)")
     p.add_argument("--trial", type=_at_least(1), metavar="K",
                    help="the trial to play, of a run holding several (default: its first)")
     p.set_defaults(func=replay_command)
     p = commands.add_parser("bounds", help="print the analytic upper bounds of a replenishment config",
                             description="Work and efficiency bounds of docs/replenishment-model.md section 9, both "
                                         "strategies; refused (exit 2) where a bound does not exist.")
-    p.add_argument("config", help="TOML config file with scenario = \"replenishment\"")
+    p.add_argument("config", nargs="?", default="replenishment",
+                   help="TOML config file with scenario = \"replenishment\", or a shipped config's name "
+                        "(default: replenishment, the shipped configs/replenishment.toml)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a config key, e.g. --set transfer_loss=0.2 or --set energy.work_ratio=2")
     p.set_defaults(func=bounds)
+    p = commands.add_parser("configs", help="list the shipped configs and sweep files, by the names commands take",
+                            description="The configs and sweep files installed with dronefleet, a line each; "
+                                        "run, bounds and sweep take their names as well as paths.")
+    p.set_defaults(func=configs_command)
     _add_sweep_commands(commands)
     _add_reproduce_command(commands, reproduce_arguments)
     return parser
@@ -333,7 +402,8 @@ def _add_sweep_commands(commands):
                                  description="Grids of conditions times seeds; see the README, section Sweeps.")
     actions = parser.add_subparsers(dest="action", required=True)
     common = argparse.ArgumentParser(add_help=False)
-    common.add_argument("sweep", help="sweep file (TOML), e.g. configs/sweeps/rules.toml")
+    common.add_argument("sweep", help="sweep file (TOML), or a shipped sweep file's name (dronefleet configs "
+                                      "lists them), e.g. configs/sweeps/rules.toml or rules")
     common.add_argument("--results", type=_path, default="results", metavar="DIR",
                         help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
     p = actions.add_parser("plan", parents=[common], help="print the runs and tasks, write a SLURM job-array script")

@@ -12,6 +12,8 @@ config and sweep file is read the same way and every refusal reads alike:
   the Python API), so that no check or message recurses through thousands of levels;
 * :data:`SCENARIO_KEY`, the top-level key that names a config's scenario;
 * :func:`shipped_config`, the path of a config or sweep file shipped with the package;
+  :func:`named_file`, a command's config or sweep argument, a path or a shipped file's name;
+  :func:`shipped_files`, their names and one-line descriptions;
 * ``_parse_override`` (``--set key=value``), ``_show``, ``_name`` and ``_suggest`` (values,
   names and "did you mean" in messages; ``_show`` shows a few items a few levels deep).
 """
@@ -31,7 +33,7 @@ from typing import Any
 from collections.abc import Callable, Iterable, Mapping
 
 __all__ = ["ConfigError", "SweepError", "MAX_CONFIG_BYTES", "MAX_DEPTH", "SCENARIO_KEY", "check_depth", "read_toml",
-           "shipped_config", "too_deep"]
+           "shipped_config", "shipped_files", "named_file", "too_deep"]
 
 #: Largest config file read [bytes]; real ones are a few KB.
 MAX_CONFIG_BYTES = 1_000_000
@@ -326,6 +328,53 @@ def _shipped_hint(path: str | PathLike, error: OSError) -> str:
         return ""
 
 
+#: The folders of ``configs/`` by kind: configs at its top, sweep files in ``sweeps/``.
+SHIPPED_FOLDERS = {"config": (), "sweep": ("sweeps",)}
+
+
+def _shipped_root() -> Path:
+    try:
+        # Path(): installed packages are folders on disk (numba's cache needs one), never zip files
+        return Path(importlib.resources.files("dronefleet.configs"))
+    except ModuleNotFoundError:  # not installed (or installed before configs were packaged)
+        return Path(__file__).resolve().parent.parent / "configs"
+
+
+def _description(path: Path) -> str:
+    """A shipped file's one-line description: its first comment line, up to a colon or an
+    opening parenthesis (the shipped files start so: "# Figure 9 of the replenishment study (...")."""
+    with open(path, encoding="utf-8") as fh:
+        first = fh.readline()
+    text = first.lstrip("#").strip() if first.startswith("#") else ""
+    return re.split(r":|\s\(", text, maxsplit=1)[0].strip()
+
+
+def shipped_files(kind: str = "config") -> dict[str, str]:
+    """The shipped configs (``kind="config"``) or sweep files (``"sweep"``): name (the file's stem,
+    as commands take it) -> one-line description, in name order."""
+    folder = _shipped_root().joinpath(*SHIPPED_FOLDERS[kind])
+    return {path.stem: _description(path) for path in sorted(folder.glob("*.toml"))}
+
+
+def named_file(text: str, kind: str = "config") -> str:
+    """A command's config (``kind="config"``) or sweep file (``"sweep"``) argument as a path.
+
+    An existing path wins, so a file of the working directory named like a shipped one is read;
+    otherwise a bare name (no folder, no ``.toml``) is the shipped file of that name (``dronefleet
+    run replenishment``, ``dronefleet sweep run rules``), from the installed package. Anything
+    else is returned unchanged, for :func:`read_toml` to read or refuse. ConfigError for a bare
+    name that is neither, listing the shipped names.
+    """
+    if os.path.lexists(text) or not re.fullmatch(r"[\w.-]+", text) or text.endswith(".toml"):
+        return text
+    names = shipped_files(kind)
+    if text not in names:
+        what = {"config": "config", "sweep": "sweep file"}[kind]
+        raise ConfigError(f"{_show(text)} is neither a file nor a shipped {what}{_suggest(text, names)}: the shipped "
+                          f"{what}s are {', '.join(names)} (dronefleet configs describes them)")
+    return str(shipped_config(*SHIPPED_FOLDERS[kind], f"{text}.toml"))
+
+
 def shipped_config(*parts: str) -> Path:
     """The path of a file shipped in the repository's ``configs/``, e.g. ``shipped_config("sweeps",
     "rules.toml")``, whatever the working directory.
@@ -334,12 +383,7 @@ def shipped_config(*parts: str) -> Path:
     ``dronefleet.configs``; a source tree put on ``sys.path`` without installing has them beside
     the package. ConfigError if the file is not there.
     """
-    try:
-        # Path(): installed packages are folders on disk (numba's cache needs one), never zip files
-        root = Path(importlib.resources.files("dronefleet.configs"))
-    except ModuleNotFoundError:  # not installed (or installed before configs were packaged)
-        root = Path(__file__).resolve().parent.parent / "configs"
-    path = root.joinpath(*parts)
+    path = _shipped_root().joinpath(*parts)
     if not path.is_file():
         raise ConfigError(f"the shipped config {'/'.join(parts)} is missing (looked for {path}): "
                           "reinstall dronefleet")

@@ -6,21 +6,26 @@ warnings and errors on stderr; ``-q`` keeps warnings and errors only, ``-v`` add
 Used as a library, dronefleet adds no handler: the caller's logging set-up decides (Python's
 default shows warnings only).
 
-Progress bars (tqdm, on stderr) are drawn only when stderr is a terminal and INFO lines are
-shown, so pipes, log files, batch jobs and ``-q`` get none.
+Progress (:func:`progress`) is a tqdm bar on stderr when stderr is a terminal, a notebook's
+bar (tqdm.auto) in Jupyter, and otherwise (nohup, a pipe, a CI log, a batch job) a log line
+every :data:`PROGRESS_INTERVAL` seconds of long work; all of them only while INFO lines are
+shown (``-q`` gets none). :func:`compile_notice` says when numba compiles, and only then.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import sys
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from tqdm import tqdm
+import time
+from collections.abc import Iterator
+from typing import Any
 
 #: The logger every module's logger descends from.
 LOGGER = "dronefleet"
+#: Seconds between two progress lines off a terminal (the first one after as long).
+PROGRESS_INTERVAL = 5.0
+_clock = time.monotonic  # a test's fake clock replaces it: no test waits for the interval
 
 
 class _Console(logging.StreamHandler):
@@ -50,11 +55,94 @@ def configure(level: int = logging.INFO) -> None:
         logger.addHandler(_Console())
 
 
-def progress(total: float, unit: str, desc: str) -> tqdm:
-    """A tqdm bar to ``total`` ``unit`` on stderr, disabled (drawing nothing) unless stderr is a
-    terminal and the ``dronefleet`` logger shows INFO lines. Close it when done."""
+def counted(n: float, noun: str, plural: str | None = None) -> str:
+    """``n`` and the noun, singular for exactly 1: "1 week", "8 weeks", "0.5 weeks", "1 mobile
+    charger"; ``plural`` where adding "s" is wrong ("process", "processes")."""
+    return f"{n:g} {noun if n == 1 else plural or noun + 's'}"
+
+
+def _in_notebook() -> bool:
+    """Whether this is a Jupyter kernel (whose output cell draws tqdm.auto's widget bar)."""
+    shell = sys.modules.get("IPython")
+    ipython = getattr(shell, "get_ipython", lambda: None)() if shell else None
+    return type(ipython).__name__ == "ZMQInteractiveShell"
+
+
+def progress(total: float, unit: str, desc: str) -> Any:
+    """Progress to ``total`` ``unit``: a tqdm bar on a terminal's stderr, tqdm.auto's bar in a
+    notebook, else (stderr not a terminal) :class:`ProgressLines`; each with tqdm's ``update``,
+    ``n``, ``set_postfix_str`` and ``close``, and a context manager. Nothing is shown unless the
+    ``dronefleet`` logger shows INFO lines (in a notebook: unless its level is set above INFO).
+    """
+    logger = logging.getLogger(LOGGER)
+    if _in_notebook():
+        from tqdm.auto import tqdm as auto
+
+        return auto(total=total, unit=unit, desc=desc.strip(), disable=logger.level > logging.INFO, leave=False)
+    shown = logger.isEnabledFor(logging.INFO)
+    if not sys.stderr.isatty():
+        return ProgressLines(total, unit, desc, shown)
     from tqdm import tqdm  # not for --help and --version: a command that draws no bar does not load it
 
-    shown = sys.stderr.isatty() and logging.getLogger(LOGGER).isEnabledFor(logging.INFO)
     return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, disable=not shown, leave=False,
                 dynamic_ncols=True)
+
+
+class ProgressLines:
+    """Progress off a terminal: an INFO line ("  runs: 12 of 360 runs (3 %), 0 failed, 41 s") at
+    an update at least :data:`PROGRESS_INTERVAL` seconds after the start or the last line, so
+    short work prints none and long work is never silent for long. The subset of tqdm's
+    interface the commands use."""
+
+    def __init__(self, total: float, unit: str, desc: str, shown: bool = True) -> None:
+        self.total, self.unit, self.desc, self.shown = total, unit, desc, shown
+        self.n: float = 0
+        self.postfix = ""
+        self.start = self.last = _clock()
+
+    def update(self, n: float = 1) -> None:
+        self.n += n
+        now = _clock()
+        if self.shown and now - self.last >= PROGRESS_INTERVAL:
+            self.last = now
+            done = f" ({100.0 * self.n / self.total:.0f} %)" if self.total else ""
+            count = f"{self.n:.1f}" if self.n != int(self.n) else f"{self.n:g}"
+            logging.getLogger(f"{LOGGER}.progress").info(
+                f"{self.desc}: {count} of {counted(self.total, self.unit)}{done}"
+                f"{', ' + self.postfix if self.postfix else ''}, {now - self.start:.0f} s")
+
+    def set_postfix_str(self, text: str, refresh: bool = True) -> None:
+        self.postfix = text
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> ProgressLines:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+@contextlib.contextmanager
+def compile_notice(what: str) -> Iterator[None]:
+    """Within the block, one INFO line when numba starts compiling ``what`` (a kernel it does not
+    find in its disk cache: the first run of a version on a machine, a new warm start or rule
+    plugin), printed as compilation starts; nothing when everything loads from the cache."""
+    from numba.core import event
+
+    logger = logging.getLogger(f"{LOGGER}.console")
+
+    class Notice(event.Listener):
+        told = False
+
+        def on_start(self, ev: event.Event) -> None:
+            if not self.told:  # the kernel's callees compile inside it: one line
+                self.told = True
+                logger.info(f"  compiling {what} (once per version and machine; numba caches it)")
+
+        def on_end(self, ev: event.Event) -> None:
+            pass
+
+    with event.install_listener("numba:compile", Notice()):
+        yield

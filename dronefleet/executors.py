@@ -9,7 +9,6 @@ module-level function or a ``functools.partial`` of one): they travel to other p
 
 import contextlib
 import ctypes
-import multiprocessing
 import os
 import signal
 import sys
@@ -17,7 +16,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import TypeVar
 
@@ -93,8 +92,8 @@ def _die_with_parent(parent):
     """End this worker when the process ``parent`` (its pid) that started it dies.
 
     A worker would otherwise outlive a sweep killed with SIGKILL (which no handler sees) and
-    go on running its run; the multiprocessing resource tracker, which the workers keep
-    alive by holding its pipe, then lives on too. Linux: the kernel sends SIGKILL at the
+    go on running its run; the resource trackers (multiprocessing's and loky's), which the
+    workers keep alive by holding their pipes, then live on too. Linux: the kernel sends SIGKILL at the
     parent's death (``prctl(PR_SET_PDEATHSIG)``); elsewhere a daemon thread polls the parent
     pid. A run killed in the middle leaves at most a hidden temporary file, as any kill does.
     """
@@ -119,8 +118,11 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
     The first item runs in this process before any worker starts: it compiles the engine
     into numba's disk cache (or loads it from there), so that the workers load it rather
     than each compiling it at the same time (~20 s of CPU each). With ``jobs == 1`` every
-    item runs in this process, which a crash then stops. Workers are spawned, not forked:
-    a fork of a process with threads (numba, pyarrow) can deadlock.
+    item runs in this process, which a crash then stops. Workers are new interpreters, not
+    forks (a fork of a process with threads, numba's or pyarrow's, can deadlock), started by
+    loky rather than multiprocessing's ``spawn``: they import ``function``'s module but never
+    the caller's main module, which ``spawn`` runs again in every worker (an unguarded
+    script would run its own work again in each, ``python - < script.py`` fails).
 
     Each worker is a pool of its own that holds one item at a time. A process pool whose
     worker dies (killed, out of memory, segfault) fails every item it holds with
@@ -141,10 +143,13 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
         for item in items:
             yield item, function(item), None
         return
-    context = multiprocessing.get_context("spawn")
+    from loky import ProcessPoolExecutor  # imported with a sweep of several processes only
+    from loky.backend import get_context
+
+    context = get_context("loky")  # not "loky_init_main", which runs the main module as spawn does
 
     def worker_pool():
-        return ProcessPoolExecutor(1, mp_context=context, initializer=_start_worker, initargs=(os.getpid(),))
+        return ProcessPoolExecutor(1, context=context, initializer=_start_worker, initargs=(os.getpid(),))
 
     holding = {}  # future -> (its pool, its item)
 

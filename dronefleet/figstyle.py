@@ -12,17 +12,28 @@ the study's colours (least_confident green, most_confident pink, random orange) 
 Okabe-Ito palette, which stays distinct under the common colour-vision deficiencies, and a
 marker, line style and hatch of its own, so that lines and boxes stay apart in greyscale
 too. Figures have no titles: their captions live in ``results/README.md``.
+
+The studies' figures are drawn at print size, as wide as a journal column
+(:data:`SINGLE_COLUMN`) or page (:data:`DOUBLE_COLUMN`), under :data:`PRINT_RC`, so that no text
+is smaller than :data:`MIN_FONT_SIZE` in print; a figure of several panels is one file, its
+panels lettered (a), (b), ... by :func:`letter_panels` as the captions letter them.
 """
 
 import itertools
 import os
+import string
 from collections.abc import Iterable, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from types import ModuleType
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 DPI = 150
+#: Widths (in) of a figure that fills one journal column, or both (the page's text width).
+SINGLE_COLUMN = 3.5
+DOUBLE_COLUMN = 7.2
+#: The smallest font size (pt) of any text of a study figure, printed at its own width.
+MIN_FONT_SIZE = 7.0
 #: The formats every figure is written in, side by side (same name, these suffixes).
 FORMATS = ("png", "pdf", "svg")
 #: Okabe & Ito's colour-blind-safe palette (Color Universal Design), by name.
@@ -74,6 +85,18 @@ _OTHER_STYLES = (Style(OKABE_ITO["sky blue"], "P", (0, (3, 1, 1, 1, 1, 1)), "++"
 #: anything drawn in the default colour cycle takes the palette too.
 RC = {"svg.hashsalt": "dronefleet", "pdf.fonttype": 42,
       "axes.prop_cycle": f"cycler(color={[style.colour for style in RULE_STYLES.values()]!r})"}
+#: On top of :data:`RC` for figures drawn at print size: text of 7-8 pt (none below
+#: :data:`MIN_FONT_SIZE`), lines, ticks and hatches thin enough for a column's width.
+PRINT_RC = {"font.size": 8.0, "axes.labelsize": 8.0, "xtick.labelsize": MIN_FONT_SIZE,
+            "ytick.labelsize": MIN_FONT_SIZE, "legend.fontsize": MIN_FONT_SIZE,
+            "legend.title_fontsize": MIN_FONT_SIZE, "axes.linewidth": 0.6, "lines.linewidth": 1.0,
+            "lines.markersize": 4.0, "patch.linewidth": 0.6, "hatch.linewidth": 0.5,
+            "xtick.major.width": 0.6, "ytick.major.width": 0.6, "xtick.major.size": 2.5,
+            "ytick.major.size": 2.5, "legend.handlelength": 1.8, "legend.borderaxespad": 0.3,
+            "legend.columnspacing": 1.2, "figure.constrained_layout.h_pad": 0.03,
+            "figure.constrained_layout.w_pad": 0.03}
+#: Font size (pt) of the panel letters, bold: the largest text of a figure.
+PANEL_LETTER_SIZE = 9.0
 
 
 def styles(names: Iterable[str], known: Mapping[str, Style]) -> dict[str, Style]:
@@ -93,9 +116,12 @@ def require_matplotlib() -> ModuleType:
         import matplotlib.backends.backend_agg
         import matplotlib.cbook
         import matplotlib.figure
+        import matplotlib.legend_handler
+        import matplotlib.lines
         import matplotlib.patches
         import matplotlib.style
         import matplotlib.ticker
+        import matplotlib.transforms
     except ImportError as error:
         raise ImportError("drawing figures needs matplotlib, a dependency of dronefleet: "
                           "pip install matplotlib") from error
@@ -108,20 +134,32 @@ def figure_paths(path: str | os.PathLike) -> list[Path]:
     return [path.with_suffix(f".{suffix}") for suffix in FORMATS]
 
 
+def letter_panels(axes: Iterable[Any]) -> None:
+    """Letter the panels ``axes`` (matplotlib Axes, in the order their caption names them) (a),
+    (b), ...: bold, :data:`PANEL_LETTER_SIZE` pt, just above each one's upper left corner,
+    outside the data."""
+    for letter, ax in zip(string.ascii_lowercase, axes):
+        ax.annotate(f"({letter})", (0.0, 1.0), xycoords="axes fraction", xytext=(-2.0, 5.0),
+                    textcoords="offset points", ha="right", va="bottom", fontsize=PANEL_LETTER_SIZE,
+                    fontweight="bold")
+
+
 @contextmanager
-def _figure(path, figsize, **subplots):
-    """A new figure and its axes (``Figure.subplots(**subplots)``), saved on exit to
-    :func:`figure_paths` of ``path`` (any suffix of ``path`` is replaced).
+def _figure(path, figsize, rc=None, mosaic=None, **subplots):
+    """A new figure and its axes (``Figure.subplots(**subplots)``, or with ``mosaic`` the dict of
+    ``Figure.subplot_mosaic(mosaic, **subplots)``), drawn under :data:`RC` and then ``rc``
+    (e.g. :data:`PRINT_RC`), saved on exit to :func:`figure_paths` of ``path`` (any suffix of
+    ``path`` is replaced).
 
     Each file is written to a hidden sibling and renamed into place: a reader never sees
     half a figure.
     """
     mpl = require_matplotlib()
     # The project's style also while saving: rcParams are read when artists are drawn.
-    with mpl.style.context(["default", RC]):
+    with mpl.style.context(["default", RC, rc or {}]):
         fig = mpl.figure.Figure(figsize=figsize, layout="constrained")
         mpl.backends.backend_agg.FigureCanvasAgg(fig)
-        axes = fig.subplots(**subplots)
+        axes = fig.subplots(**subplots) if mosaic is None else fig.subplot_mosaic(mosaic, **subplots)
         yield mpl, fig, axes
         for target, suffix in zip(figure_paths(path), FORMATS):
             tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")

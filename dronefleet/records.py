@@ -229,17 +229,23 @@ def read_config(path: str | os.PathLike, build: Callable[[dict[str, Any]], Any],
         raise DataError(f"{kind} {str(path)!r} holds a config that is not valid: {error}", error.keys) from None
 
 
+def check_trial(trial: int, trials: range, holder: str) -> None:
+    """ConfigError (one line) unless ``trial`` is one of ``trials``, those ``holder`` (a run
+    folder, or the run about to be made) holds."""
+    from .config import ConfigError
+
+    if trial not in trials:
+        raise ConfigError(f"--trial {trial}: {holder} holds trials {trials.start} to {trials.stop - 1}")
+
+
 def chosen_trial(run_dir: Path, trials: range, trial: int | None) -> int:
     """``trial`` (None: the first of ``trials``, the trials its config says the run in ``run_dir``
     holds); ConfigError (one line) if the config does not hold it or the run's ``summary.parquet``
     has no row of it (a table whose rows are not its config's)."""
-    from .config import ConfigError
     from .datafiles import DataError, read_parquet
 
     chosen = trials.start if trial is None else trial
-    if chosen not in trials:
-        raise ConfigError(f"--trial {chosen}: RUN_DIR {str(run_dir)!r} holds trials {trials.start} to "
-                          f"{trials.stop - 1}")
+    check_trial(chosen, trials, f"RUN_DIR {str(run_dir)!r}")
     summary = run_dir / "summary.parquet"
     if chosen not in read_parquet(summary, {"trial": pa.int64()}).column("trial").to_pylist():
         raise DataError(f"table {str(summary)!r} has no row of trial {chosen}, one of the trials "

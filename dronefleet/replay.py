@@ -7,23 +7,36 @@ scenario's subpackage) inline: no file or address outside the page is ever fetch
 scenario provides the page through the contract of :mod:`dronefleet.scenarios`
 (``replay_data(run_dir) -> dict``); the page's player gives it play/pause, speed, a time
 slider, the counters, an overview chart and ``#t=SECONDS`` (open paused at that time).
+
+``dronefleet replay DATASET --run KEY=VALUE ...`` plays one run of a sweep's dataset
+(:func:`write_dataset_run`): its parts, or, if its tables were not kept, the run simulated
+again from the config its summary part holds (the seed included).
 """
 
 import json
+import logging
 import math
 import os
 import re
+import tempfile
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from . import scenarios
-from .config import SCENARIO_KEY, ConfigError
+from . import scenarios, sweeps
+from .config import SCENARIO_KEY, ConfigError, _show, one_line
 from .datafiles import DataError, parquet_schema
 from .outputs import check_output_file, writing
-from .records import CONFIG_KEY, REPLAY_FILE, read_config_dict, run_dir_state, write_atomic
+from .records import CONFIG_KEY, REPLAY_FILE, read_config_dict, run_dir_state, write_atomic, write_tables
 
-__all__ = ["scenario_of_run", "page", "write"]
+__all__ = ["scenario_of_run", "page", "write", "is_dataset", "select_run", "write_dataset_run"]
+
+log = logging.getLogger(__name__)
+
+#: Folder of a dataset where its runs' pages go by default (``_``: dataset readers skip it).
+DATASET_PAGES = "_replay"
+#: At most this many values of a key are listed when a --run selection is refused.
+SHOWN_VALUES = 20
 
 TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
 
@@ -87,9 +100,11 @@ def page(data: dict[str, Any], scene_script: str) -> str:
     return re.sub(r"/\*(?:DATA|SCENE)\*/", lambda match: parts.pop(match[0], match[0]), template)
 
 
-def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None = None) -> Path:
+def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None = None,
+          source: str | None = None) -> Path:
     """Write the replay page of the run in ``run_dir`` (of its trial ``trial`` if its runs hold
-    several; None: the first) to ``out`` (atomically); return ``out``.
+    several; None: the first) to ``out`` (atomically); return ``out``. ``source``, if given, says
+    where the run comes from (a sweep's run): the page's data holds it and its title ends with it.
 
     Raises ConfigError (one line) if ``run_dir`` is not a complete run folder, does not hold
     ``trial``, would make a page too large, or holds a
@@ -100,6 +115,19 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None 
     """
     run_dir, out = Path(run_dir), Path(out)
     scenario = scenario_of_run(run_dir)
+    _check_out(out, run_dir)
+    # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it
+    data = scenario.replay_data(run_dir, trial)
+    if source is not None:
+        data = {**data, "source": source, "title": f"{data['title']} ({source})"}
+    html = page(data, scenario.replay_script)
+    with writing(out):
+        return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))
+
+
+def _check_out(out: Path, run_dir: Path) -> None:
+    """Refuse (ConfigError, one line) a page file ``out`` that cannot be written or would spoil a
+    run folder: only ``run_dir``'s own :data:`REPLAY_FILE` may go into one."""
     if out.is_dir():
         raise ConfigError(f"--out {str(out)!r} is a folder; give the page's file name, e.g. {out / REPLAY_FILE}")
     check_output_file(out, "--out", "give the path of a file for the page")  # /dev/null stays a device
@@ -109,10 +137,141 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None 
     # or pass for that run's page
     own_page = out.name == REPLAY_FILE and out.parent.resolve() == run_dir.resolve()
     if not own_page and any(run_dir_state(out.parent, s.tables) in ("complete", "partial")
-                            for s in scenarios.registered().values()):
+                            for s in scenarios.loading().values()):
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
-    # every table is read through dronefleet.datafiles: a damaged one is a DataError naming it
-    html = page(scenario.replay_data(run_dir, trial), scenario.replay_script)
-    with writing(out):
-        return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))
+
+
+def is_dataset(folder: str | os.PathLike) -> bool:
+    """Whether ``folder`` is a sweep's dataset (its layout file, or a ``summary`` folder of parts),
+    not a run folder."""
+    folder = Path(folder)
+    return not (folder / "summary.parquet").exists() and (
+        (folder / sweeps.LAYOUT_FILE).exists() or (folder / "summary").is_dir())
+
+
+def _shown_values(values) -> str:
+    """Distinct ``values`` (texts of folder names), each on one line and cut, the first :data:`SHOWN_VALUES`."""
+    values = list(dict.fromkeys(values))
+    shown = ", ".join(_short(value) for value in values[:SHOWN_VALUES])
+    return shown + (f", ... ({len(values)} values)" if len(values) > SHOWN_VALUES else "")
+
+
+def _short(text: str) -> str:
+    text = one_line(text)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _matches(value: str, text: str) -> bool:
+    """Whether a run's ``value`` (as its path spells it) is the one ``text`` names: the same
+    text, or the same number (``15`` names ``15.0``)."""
+    if value == text:
+        return True
+    try:
+        return float(value) == float(text)
+    except ValueError:
+        return False
+
+
+def select_run(dataset: Path, selection: list[str]) -> sweeps.Run:
+    """The one run of the sweep dataset ``dataset`` whose partition values the ``KEY=VALUE`` texts
+    of ``selection`` name (:func:`dronefleet.sweeps.dataset_parts`); ConfigError (one line)
+    listing what is allowed if a text is malformed or names another key, or if no run or several
+    runs match. Only the chosen run's part is read."""
+    keys, parts = sweeps.dataset_parts(dataset)
+    if not parts:
+        raise ConfigError(f"no run of the dataset {dataset} is done: nothing to replay (dronefleet sweep run)")
+    chosen, given = parts, {}
+    for text in selection:
+        key, equals, value = text.partition("=")
+        key, value = key.strip(), value.strip()
+        if not equals:
+            raise ConfigError(f"--run {_show(text)}: expected KEY=VALUE, one of the keys {', '.join(keys)}, "
+                              f"e.g. --run {keys[0]}={parts[0][0][keys[0]]}")
+        name = key if key in keys else key.rpartition(".")[2]  # section.key, as everywhere
+        if name not in keys:
+            raise ConfigError(f"--run {_show(text)}: the runs of the dataset {dataset} are told apart by "
+                              f"{', '.join(keys)}; choose with those")
+        if name in given:
+            raise ConfigError(f"--run {name} is given twice ({_show(given[name])} and {_show(value)}); "
+                              "give each key once")
+        given[name] = value
+        matching = [(values, part) for values, part in chosen if _matches(values[name], value)]
+        if not matching:
+            among = "" if len(given) == 1 else " among the runs of " + ", ".join(
+                f"{k}={_short(v)}" for k, v in given.items() if k != name)
+            raise ConfigError(f"--run {name}={_short(value)}: no run of the dataset {dataset} has it; allowed{among}: "
+                              f"{name} = {_shown_values(values[name] for values, _ in chosen)}")
+        chosen = matching
+    if len(chosen) > 1:
+        open_keys = [key for key in keys if len({values[key] for values, _ in chosen}) > 1]
+        choices = "; ".join(f"{key} = {_shown_values(values[key] for values, _ in chosen)}" for key in open_keys)
+        which = f"--run {' --run '.join(f'{k}={_short(v)}' for k, v in given.items())} matches" if given else "it holds"
+        raise ConfigError(f"the dataset {dataset}: {which} {len(chosen)} runs; choose one with --run KEY=VALUE "
+                          f"for {', '.join(open_keys)} ({choices})")
+    return sweeps.dataset_run(dataset, keys, chosen[0][1])
+
+
+def _run_folder(run: sweeps.Run, dataset: Path, folder: Path) -> Path:
+    """A run folder (``folder``/run) of ``run``'s tables in ``dataset``: its parts if all were
+    kept, else the run simulated again from its config, whose summary must be the part's."""
+    from .datafiles import DataError, read_parquet
+
+    scenario, run_dir = run.scenario, folder / "run"
+    if all(os.path.lexists(run.path(dataset, table)) for table in scenario.tables):
+        problem = sweeps.damage(run, dataset)
+        if problem is not None:
+            raise ConfigError(f"{problem}: run {run.partition} cannot be replayed (dronefleet sweep run redoes it)")
+        run_dir.mkdir()
+        for table in scenario.tables:
+            (run_dir / f"{table}.parquet").symlink_to(run.path(dataset, table).absolute())
+        return run_dir
+    log.info(f"dronefleet replay: the tables of run {run.partition} were not kept; simulating it again from "
+             f"its config ({scenario.seed_key} {run.value(scenario.seed_key)})")
+    tables = scenario.simulate(run.config)
+    part = run.path(dataset, "summary")
+    again = tables["summary"].drop_columns([key for key in run.keys if key in tables["summary"].column_names])
+    stored = read_parquet(part, dict(zip(again.column_names, again.schema.types)), "part", exact=True)
+    if not stored.to_pandas().equals(again.to_pandas()):  # pandas: NaN (no such metric) equals NaN
+        raise DataError(f"part {str(part)!r}: its run simulated again from its config gives another summary "
+                        "(a part of another dronefleet version, or tampered with)")
+    write_tables(tables, run_dir, run.config)
+    return run_dir
+
+
+def write_dataset_run(dataset: str | os.PathLike, selection: list[str], out: str | os.PathLike | None = None,
+                      trial: int | None = None) -> Path:
+    """Write the replay page of the run of the sweep dataset ``dataset`` that ``selection``
+    (``KEY=VALUE`` texts, :func:`select_run`) names, of its trial ``trial`` (None: its first), to
+    ``out`` (default ``dataset/_replay/<run id>.html``); return the page's path.
+
+    The run's parts are played if all its tables were kept, else the run is simulated again
+    from the config its summary part holds (and refused if that gives another summary).
+    ConfigError (one line, before any simulation or write) for a selection that names no run
+    or several, an ``out`` that cannot be written or lies among the dataset's tables, a page
+    the scenario would refuse, or a damaged part (named).
+    """
+    dataset = Path(dataset)
+    run = select_run(dataset, selection)
+    default = out is None
+    out = dataset / DATASET_PAGES / f"{run.id}.html" if default else Path(out)
+    inside = [table for table in run.scenario.tables if Path(os.path.abspath(out)).is_relative_to(
+        os.path.abspath(dataset / table))]
+    if inside:
+        raise ConfigError(f"--out {str(out)!r} lies in the dataset's {inside[0]} files, which readers take whole: "
+                          f"give a file outside {dataset / inside[0]}")
+    if out.parent.is_dir() or not default:  # the default folder is made only once the page can be written
+        _check_out(out, dataset)
+    run.scenario.check_replayable(run.config, trial)
+    with tempfile.TemporaryDirectory(prefix="dronefleet-replay-") as folder:
+        run_dir = _run_folder(run, dataset, Path(folder))
+        if default:
+            with writing(out.parent):
+                out.parent.mkdir(exist_ok=True)
+        try:
+            return write(run_dir, out, trial, f"sweep dataset {dataset.name}, run {run.partition}")
+        except ConfigError as error:  # name the dataset's files, not the temporary folder's
+            text = str(error)
+            for table in run.scenario.tables:
+                text = text.replace(str(run_dir / f"{table}.parquet"), str(run.path(dataset, table)))
+            raise ConfigError(text.replace(str(run_dir), f"{dataset} run {run.partition}")) from None

@@ -55,7 +55,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from . import executors, scenarios
+from . import console, executors, scenarios
 from .config import ConfigError, shipped_config
 from .contract import FigureStudy
 from .datafiles import DataError, checked_column, parquet_schema, read_parquet
@@ -333,9 +333,7 @@ def draw_fig16(study: Study, figure: str = "fig16") -> list[Path]:
 
     d = study.root / figure
     outcomes, backlog = _read(study, figure, "outcomes"), _read(study, figure, "backlog")
-    return [*figures.delivered_vs_delivery_time(outcomes, d / f"{figure}a"),
-            *figures.aborted_by_tau(outcomes, d / f"{figure}b"),
-            *figures.backlog_bars(backlog, d / f"{figure}c")]
+    return figures.rule_outcomes(outcomes, backlog, d / figure)
 
 
 def tidy_fig17(study: Study) -> None:
@@ -458,7 +456,7 @@ def _studies(registry: Mapping[str, scenarios.Scenario]) -> dict[str, FigureStud
 def studies() -> dict[str, FigureStudy]:
     """Every study by its scenario's name, of every registered scenario (built-in, then installed).
     ConfigError if two name one figure."""
-    found = _studies(scenarios.registered())
+    found = _studies(scenarios.loading())
     owners = {}
     for name, study in found.items():
         for figure in study.FIGURES:
@@ -623,14 +621,16 @@ def command(args: argparse.Namespace) -> int:
             raise SweepError("--check re-runs runs and --redraw only draws: give one of them")
         if args.theta is not None:
             raise SweepError("--check re-runs runs and --theta chooses what fig19 draws: give one of them")
-        differences = [line for figure in figures for line in check(figure, root, args.quick)]
+        with console.compile_notice("a simulation kernel"):
+            differences = [line for figure in figures for line in check(figure, root, args.quick)]
         for line in differences:
             log.info(f"  differs: {line}")
         log.info(f"reproduce {named} --check: "
                  f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
                  f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
-    reproduce(figures, root, args.quick, args.jobs, args.redraw, theta=args.theta)
+    with console.compile_notice("a simulation kernel"):  # the sweeps' first runs run in this process
+        reproduce(figures, root, args.quick, args.jobs, args.redraw, theta=args.theta)
     log.info(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s, "
              f"under {Path(root) / 'quick' if args.quick else root}")
     return 0

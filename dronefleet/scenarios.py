@@ -22,7 +22,8 @@ Registered are:
   ``"package.module:object"``. One is loaded when a config, sweep or call names it (or
   ``reproduce`` lists every study); one that fails to import, or does not meet the contract
   (:func:`dronefleet.contract.contract_problems`), is refused in one line naming the entry
-  point, and so is one named like a built-in.
+  point where something names it (:func:`get`), left out with a warning from the lists of
+  every scenario (:func:`loading`), and one named like a built-in is refused.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from __future__ import annotations
 import os
 import functools
 import importlib
+import logging
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from importlib import resources
@@ -44,7 +46,9 @@ from .plugins import importing
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["Scenario", "SCENARIOS", "installed", "registered", "get", "scenario_of", "load"]
+__all__ = ["Scenario", "SCENARIOS", "installed", "registered", "loading", "get", "scenario_of", "load"]
+
+logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -129,7 +133,7 @@ class Scenario:
     def _replay_data(self) -> Callable[..., dict[str, Any]]:
         replay_data = getattr(self.module, "replay_data", None)
         if replay_data is None:
-            having = [s.name for s in registered().values() if hasattr(s.module, "replay_data")]
+            having = [s.name for s in loading().values() if hasattr(s.module, "replay_data")]
             raise ConfigError(f"scenario {self.name!r} has no replay page; scenarios with one: {', '.join(having)}")
         return replay_data
 
@@ -139,13 +143,22 @@ class Scenario:
         replay_data = self._replay_data()
         if trial is None:
             return replay_data(run_dir)
-        if not hasattr(self.module, "replicates"):
-            raise ConfigError(f"--trial {trial}: a {self.name} run is one replicate, it has no trials to choose")
+        self._check_has_trials(trial)
         return replay_data(run_dir, trial)
 
-    def check_replayable(self, config: Any) -> None:
-        """ConfigError (one line) if the replay page of a run of ``config`` would be refused."""
+    def _check_has_trials(self, trial: int) -> None:
+        if not hasattr(self.module, "replicates"):
+            raise ConfigError(f"--trial {trial}: a {self.name} run is one replicate, it has no trials to choose")
+
+    def check_replayable(self, config: Any, trial: int | None = None) -> None:
+        """ConfigError (one line) if the replay page of a run of ``config`` (of its trial
+        ``trial``; None: its first) would be refused: asked before the run."""
         self._replay_data()
+        if trial is not None:
+            from .records import check_trial  # not at the top: the registry imports no numpy until used
+
+            self._check_has_trials(trial)
+            check_trial(trial, self.replicates(config), "the run")
         check = getattr(self.module, "check_replayable", None)
         if check is not None:
             check(config)
@@ -227,6 +240,28 @@ def installed() -> dict[str, Scenario]:
 def registered() -> dict[str, Scenario]:
     """Every registered scenario by name: the built-ins, then the installed ones (:func:`installed`)."""
     return {**SCENARIOS, **installed()}
+
+
+@functools.cache  # once per scenario and process: every list of the scenarios meets it
+def _warn_left_out(name: str, why: str) -> None:
+    logger.warning(f"dronefleet: warning: scenario {name!r} left out: {why}")
+
+
+def loading() -> dict[str, Scenario]:
+    """The registered scenarios that load: the built-ins and each installed one that imports and meets
+    the contract. One that does not is left out, said once in a warning naming its entry point: it
+    breaks only what names it (a config, sweep or call, refused there in one line by :func:`get`),
+    not the lists of every scenario (studies, figures, replay pages, bounds) the others rely on."""
+    found = {}
+    for name, scenario in registered().items():
+        if name not in SCENARIOS:
+            try:
+                _load_entry_point(name)
+            except ConfigError as error:
+                _warn_left_out(name, str(error))
+                continue
+        found[name] = scenario
+    return found
 
 
 def get(name: object, where: str = "") -> Scenario:

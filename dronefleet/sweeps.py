@@ -106,10 +106,10 @@ from contextlib import suppress
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-from urllib.parse import quote
+from urllib.parse import quote, unquote
 
 from . import console, scenarios
-from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, one_line, read_toml
+from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, named_file, one_line, read_toml
 from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
@@ -864,8 +864,9 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
     failures = {}
     for finished, (run, error, crash) in enumerate(results, start=1):
         if crash is not None:
+            # one line: loky's message names the worker's exit code on a line of its own
             error = _record_failure(run, out, f"its worker died (killed, out of memory or crashed) while running it: "
-                                              f"{type(crash).__name__}: {crash}",
+                                              f"{type(crash).__name__}: {one_line(crash)}",
                                     "".join(traceback.format_exception(crash)))
         if error is not None:
             failures[run] = error
@@ -981,6 +982,44 @@ def _done_runs(sweep: Sweep, out: Path) -> list[Run]:
     return done
 
 
+def dataset_parts(out: Path) -> tuple[tuple[str, ...], list[tuple[dict[str, str], Path]]]:
+    """The partition keys of the dataset folder ``out`` (a sweep's output: no sweep file needed)
+    and, for every run whose summary is there, its values as its path spells them (``{"rule":
+    "random", "seed": "3"}``, decoded) and its summary part; in path order, at most
+    :data:`MAX_RUNS`. Nothing is read but the folders: a damaged run elsewhere does not matter
+    (:func:`dataset_run` reads the one chosen).
+
+    SweepError (one line) if ``out`` holds no dataset, or more runs than a sweep may hold.
+    """
+    keys = _found_layout(out, ("summary",)) if out.is_dir() else None
+    if keys is None:
+        raise SweepError(f"{out} holds no sweep dataset: no {LAYOUT_FILE} and no summary/<key>=<value>/... "
+                         "folders (give the folder dronefleet sweep run wrote, <results>/<sweep name>)")
+    pattern = "/".join(f"{key}=*" for key in keys) + "/part-0.parquet"
+    parts = []
+    for part in sorted((out / "summary").glob(pattern)):
+        if len(parts) == MAX_RUNS:
+            raise SweepError(f"{out} holds more than {MAX_RUNS:,} runs; a sweep holds at most {MAX_RUNS:,}")
+        folders = part.relative_to(out / "summary").parts[:-1]
+        parts.append(({key: unquote(folder.split("=", 1)[1]) for key, folder in zip(keys, folders)}, part))
+    return keys, parts
+
+
+def dataset_run(out: Path, keys: tuple[str, ...], part: Path) -> Run:
+    """The run whose summary part in the dataset ``out`` (partitioned by ``keys``) is ``part``,
+    from the config the part holds; DataError naming the part if it cannot be read, holds no
+    valid config, or that of another run than the folder it lies in (moved, tampered with)."""
+    from .records import read_config_dict
+
+    name = read_config_dict(part, "part").get(SCENARIO_KEY, "delivery")
+    scenario = scenarios.get(name, f"part {str(part)!r}: ")
+    run = Run(scenario.read_config(part), keys, scenario)
+    if run.path(out, "summary") != part:
+        raise DataError(f"part {str(part)!r} holds the config of run {run.partition}, not of the folder it "
+                        "lies in: a part moved or tampered with")
+    return run
+
+
 def _partition_schema(sweep: Sweep):
     """The partition keys of ``sweep`` as a pyarrow schema, each with its config type."""
     import pyarrow as pa
@@ -1074,7 +1113,7 @@ def rows(sweep: Sweep, out: str | os.PathLike, table: str, data: pyarrow.dataset
 
 
 def _open(args) -> tuple[Sweep, Path]:
-    sweep = load_sweep(args.sweep)
+    sweep = load_sweep(named_file(args.sweep, "sweep"))  # a path, or a shipped sweep file's name
     out = Path(args.results) / sweep.name
     check_layout(sweep, out)
     return sweep, out
@@ -1142,7 +1181,8 @@ def run_command(args: argparse.Namespace) -> int:
     log.debug(f"  sweep file {sweep.path}")
     start = time.perf_counter()
     try:
-        ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
+        with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # its first run runs here
+            ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
     except KeyboardInterrupt:
         log.warning(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
         return 130  # the shell's code for a command stopped by Ctrl-C

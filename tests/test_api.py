@@ -24,22 +24,66 @@ REPLENISHMENT = ROOT / "configs" / "replenishment.toml"
 TINY = {"delivery": {"horizon_weeks": 0.05, "n_uavs": 5}, "replenishment": {"trials": 2, "ticks": 300}}
 
 
-def readme_examples():
-    """The ```python blocks of the README's section "Python API" (other sections hold fragments)."""
-    section = (ROOT / "README.md").read_text(encoding="utf-8").split("\n## Python API\n")[1].split("\n## ")[0]
-    return re.findall(r"^```python\n(.*?)^```", section, re.MULTILINE | re.DOTALL)
+def api_examples():
+    """``{"file, example N": code}``: the ```python blocks of the README and the docs that call the
+    API (``dronefleet.run(`` or ``dronefleet.sweep(``; other blocks hold fragments)."""
+    found = {}
+    for path in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
+        blocks = re.findall(r"^```python\n(.*?)^```", path.read_text(encoding="utf-8"), re.MULTILINE | re.DOTALL)
+        calling = [code for code in blocks if "dronefleet.run(" in code or "dronefleet.sweep(" in code]
+        found.update({f"{path.relative_to(ROOT)}, example {n}": code for n, code in enumerate(calling, start=1)})
+    return found
 
 
 def test_the_readme_has_python_examples_of_run_and_sweep():
-    code = "\n".join(readme_examples())
+    code = "\n".join(api_examples().values())
     assert "dronefleet.run(" in code and "dronefleet.sweep(" in code and '"replenishment"' in code
 
 
-@pytest.mark.parametrize("number", range(len(readme_examples())))
-def test_the_readme_python_examples_run(number, tmp_path, monkeypatch, capsys):
-    monkeypatch.chdir(tmp_path)  # what an example saves lands here
-    exec(compile(readme_examples()[number], f"README.md python example {number + 1}", "exec"), {})
-    assert capsys.readouterr().out  # each example prints what it shows
+def run_python(how, code, folder):
+    """Python on ``code`` as a user runs it, from ``folder``: ``how`` is "script" (``python
+    script.py``), "stdin" (``python - < script.py``) or "-c" (``python -c CODE``)."""
+    script = folder / "script.py"
+    script.write_text(code, encoding="utf-8")
+    command = {"script": [sys.executable, script.name], "stdin": [sys.executable, "-"],
+               "-c": [sys.executable, "-c", code]}[how]
+    with script.open("rb") as stdin:
+        return subprocess.run(command, cwd=folder, stdin=stdin if how == "stdin" else subprocess.DEVNULL,
+                              capture_output=True, text=True, timeout=900, check=False)
+
+
+def sweeping(examples):
+    """The examples that run a sweep, which starts worker processes."""
+    return [name for name, code in examples.items() if "dronefleet.sweep(" in code]
+
+
+# Real interpreters, unguarded scripts (no `if __name__ == "__main__":`), as the README shows
+# them: a sweep's workers are other processes, which an exec in this one does not show.
+@pytest.mark.parametrize("how, name", [*(("script", name) for name in api_examples()),
+                                       ("stdin", sweeping(api_examples())[0]), ("-c", sweeping(api_examples())[0])])
+def test_the_python_examples_of_the_readme_and_docs_run_as_scripts(how, name, tmp_path):
+    done = run_python(how, api_examples()[name], tmp_path)  # what an example saves lands in tmp_path
+    assert done.returncode == 0, done.stderr
+    assert done.stdout  # each example prints what it shows
+
+
+#: A sweep on worker processes, from a script whose lines outside any guard say when they run.
+SCRIPT = """
+print("the script's top level runs")
+import dronefleet
+
+def main():
+    table = dronefleet.sweep({"rule": ["least_confident", "random"]}, seeds=[0, 1], jobs=2,
+                             set={"horizon_weeks": 0.05, "n_uavs": 5})
+    print(len(table), "rows")
+"""
+
+
+@pytest.mark.parametrize("guard", ["", 'if __name__ == "__main__":\n    '], ids=["unguarded", "guarded"])
+def test_sweep_workers_never_run_the_callers_script(guard, tmp_path):
+    done = run_python("script", f"{SCRIPT}\n{guard}main()\n", tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == ["the script's top level runs", "4 rows"]  # once: in no worker
 
 
 def test_the_docstring_examples_run():
@@ -168,3 +212,29 @@ def test_import_loads_no_numerical_library_and_a_run_no_pandas_until_a_table_is_
     proc = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=600, check=False)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout.splitlines()[-1]) == [[], ["numpy", "pyarrow"], ["numpy", "pandas", "pyarrow"]]
+
+
+#: A sweep whose winner rule is defined in the script itself, on worker processes.
+RULE_IN_SCRIPT = """
+from numba import njit
+import dronefleet
+
+@njit(cache=False)
+def fullest(f, w_norm, soc, theta, rng):
+    return f >= 0.0, soc
+
+fullest.bids_on = "policy"
+try:
+    dronefleet.sweep({"rule": ["least_confident", "__main__:fullest"]}, seeds=[0], jobs=2,
+                     set={"horizon_weeks": 0.05, "n_uavs": 5})
+except dronefleet.config.ConfigError as error:
+    print(error)
+"""
+
+
+def test_a_plugin_in_the_calling_script_is_refused_before_a_sweep_with_workers(tmp_path):
+    # The workers never run the script: "__main__" there is not it. Said before any run, in one line.
+    done = run_python("script", RULE_IN_SCRIPT, tmp_path)
+    assert done.returncode == 0, done.stderr
+    message, = done.stdout.splitlines()
+    assert message.startswith("rule='__main__:fullest' ") and "jobs=1" in message

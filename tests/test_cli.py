@@ -233,3 +233,126 @@ def test_ctrl_c_ends_in_one_line_with_the_outputs_absent(tmp_path, capsys, monke
     assert cli.main(["run", *SHORT, "--out", str(tmp_path / "out")]) == 130
     assert capsys.readouterr().err == "dronefleet: interrupted\n"
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["replay", "run", "--trial", "0"], "argument --trial: expected an integer >= 1"),
+    (["run", "--replay", "--trial", "x"], "argument --trial: expected an integer >= 1"),
+    (["replay", "ds", "--run"], "argument --run: expected one argument"),
+])
+def test_replay_options_with_bad_values_are_one_line_usage_errors(argv, fragment, capsys):
+    with pytest.raises(SystemExit) as stop:
+        cli.main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.count("\n") == 1 and fragment in err, err
+
+
+def test_replay_help_names_the_dataset_run_and_the_trial(capsys):
+    for argv, options in ((["replay", "--help"], ("RUN_DIR|DATASET", "--run KEY=VALUE", "--trial K")),
+                          (["run", "--help"], ("--replay", "--trial K"))):
+        with pytest.raises(SystemExit):
+            cli.main(argv)
+        shown = capsys.readouterr().out
+        assert all(option in shown for option in options), shown
+
+
+# ---------------------------------------------------------------- shipped configs and sweep files by name
+
+
+def test_run_and_bounds_take_a_shipped_config_by_name_from_any_directory(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # away from the repository's configs/
+    assert cli.main(["run", "replenishment", "--set", "trials=1", "--set", "ticks=30", "--out", "r"]) == 0
+    config = json.loads(pq.read_schema(tmp_path / "r" / "summary.parquet").metadata[b"dronefleet.config"])
+    assert config["scenario"] == "replenishment" and config["run"]["ticks"] == 30
+    assert "dronefleet run: replenishment," in capsys.readouterr().out
+    assert cli.main(["bounds", "replenishment"]) == 0
+    assert capsys.readouterr().out.startswith("dronefleet bounds: replenishment,")
+
+
+def test_bounds_defaults_to_the_replenishment_config_and_its_e_cs_with_loss_is_positive(tmp_path, capsys,
+                                                                                       monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["bounds", "--set", "transfer_loss=0.6"]) == 0
+    (e_cs,) = [line.split()[1] for line in capsys.readouterr().out.splitlines() if line.split()[:1] == ["E_cs"]]
+    assert float(e_cs) == pytest.approx(0.3731, abs=5e-5)
+
+
+def test_a_path_wins_over_the_shipped_file_of_the_same_name(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "replenishment").write_text('scenario = "replenishment"\n[run]\ntrials = 1\nticks = 20\n')
+    assert cli.main(["run", "replenishment", "--out", "r"]) == 0
+    config = json.loads(pq.read_schema(tmp_path / "r" / "summary.parquet").metadata[b"dronefleet.config"])
+    assert config["run"]["ticks"] == 20
+
+
+def test_sweep_commands_take_a_shipped_sweep_file_by_name(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["sweep", "plan", "smoke", "--results", "res"]) == 0
+    assert str(shipped_config("sweeps", "smoke.toml")) in (tmp_path / "res" / "smoke" / "smoke.sbatch").read_text()
+    capsys.readouterr()
+    assert cli.main(["sweep", "status", "rules", "--results", "res"]) == 1  # nothing run yet
+    assert capsys.readouterr().out.startswith("sweep rules: ")
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["run", "replenishmnt"], "'replenishmnt' is neither a file nor a shipped config (did you mean 'replenishment'?)"),
+    (["bounds", "papr"], "'papr' is neither a file nor a shipped config (did you mean 'paper'?)"),
+    (["sweep", "run", "rule"], "'rule' is neither a file nor a shipped sweep file (did you mean 'rules'?)"),
+])
+def test_a_name_that_is_neither_a_file_nor_shipped_is_refused_listing_the_names(argv, named, tmp_path, capsys,
+                                                                               monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.err.startswith(f"dronefleet: error: {named}") and captured.err.count("\n") == 1
+    assert ("replenishment" if argv[0] != "sweep" else "replenishment-fig12") in captured.err and captured.out == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_configs_lists_every_shipped_config_and_sweep_file_with_a_description(capsys):
+    assert cli.main(["configs"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    folder = shipped_config("paper.toml").parent
+    for path in [*folder.glob("*.toml"), *folder.glob("sweeps/*.toml")]:
+        (line,) = [line for line in lines if line.split()[:1] == [path.stem]]
+        assert len(line.split()) > 2, line  # a description after the name
+    assert any(line.startswith("configs: ") and str(folder) in line for line in lines)
+
+
+# ---------------------------------------------------------------- what the commands print
+
+
+@pytest.mark.parametrize("command", [[], ["run"], ["bounds"], ["configs"], ["sweep", "run"], ["replay"]])
+def test_help_shows_no_rest_markup(command, capsys):
+    with pytest.raises(SystemExit) as done:
+        cli.main([*command, "--help"])
+    assert done.value.code == 0
+    shown = capsys.readouterr().out
+    assert "usage: dronefleet" in shown
+    assert "``" not in shown and ":mod:`" not in shown and ":func:`" not in shown
+
+
+def test_a_cached_run_prints_no_compile_notice(tmp_path, capsys):
+    args = ["run", str(shipped_config("replenishment.toml")), "--set", "trials=1", "--set", "ticks=30"]
+    assert cli.main([*args, "--out", str(tmp_path / "first")]) == 0  # compiles if no cache has the kernel
+    capsys.readouterr()
+    assert cli.main([*args, "--out", str(tmp_path / "again")]) == 0
+    assert "compil" not in capsys.readouterr().out
+
+
+def test_one_of_a_thing_is_singular_and_the_backlog_age_says_it_is_a_sum(tmp_path, capsys):
+    assert cli.main(["run", "--set", "horizon_weeks=1", "--set", "n_uavs=1",
+                     "--out", str(tmp_path / "d")]) == 0
+    printed = capsys.readouterr().out
+    assert ", 1 UAV, 1 week" in printed.splitlines()[0]
+    (backlog,) = [line for line in printed.splitlines() if "backlog age" in line]
+    summary = pq.read_table(tmp_path / "d" / "summary.parquet").to_pylist()[0]
+    days, pending = summary["backlog_age_s"] / 86400.0, summary["pending"]
+    assert pending > 1  # one UAV cannot keep up with a week of orders
+    assert backlog.split(None, 3)[:3] == ["backlog", "age", "(summed)"]
+    assert f"{days:,.1f} days over {pending} pending order" in backlog
+    assert f"{days / pending:.1f} days each on average" in backlog
+    assert cli.main(["run", "replenishment", "--set", "n_workers=1", "--set", "n_chargers=1", "--set", "trials=1",
+                     "--set", "ticks=30", "--out", str(tmp_path / "r")]) == 0
+    printed = capsys.readouterr().out
+    assert "1 worker, 1 mobile charger (phi 2)" in printed and "over 1 trial " in printed

@@ -53,3 +53,58 @@ def test_replenishment_configurations_count_on_a_bar_on_a_terminal_only(monkeypa
         drawn[name] = stream.getvalue()
     assert "  configurations:" in drawn["terminal"] and "/2 " in drawn["terminal"]
     assert drawn["pipe"] == drawn["quiet"] == ""
+
+
+def test_progress_off_a_terminal_is_a_log_line_every_interval(monkeypatch, capsys):
+    # nohup, a pipe, a CI log: stderr is no terminal, and long work was silent
+    now = [0.0]
+    monkeypatch.setattr(console, "_clock", lambda: now[0])  # no waiting: the clock moves 1 s per run
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
+    console.configure(logging.INFO)
+    with console.progress(360, "run", "  runs") as bar:
+        for _ in range(12):
+            now[0] += console.PROGRESS_INTERVAL / 5
+            bar.set_postfix_str("0 failed", refresh=False)
+            bar.update(1)
+    seconds = console.PROGRESS_INTERVAL
+    assert capsys.readouterr().out.splitlines() == [f"  runs: 5 of 360 runs (1 %), 0 failed, {seconds:.0f} s",
+                                                    f"  runs: 10 of 360 runs (3 %), 0 failed, {2 * seconds:.0f} s"]
+    assert sys.stderr.getvalue() == ""  # no bar drawn into a log
+    console.configure(logging.WARNING)  # -q: no lines either
+    with console.progress(1, "week", "  simulated") as bar:
+        now[0] += 10 * seconds
+        bar.update(0.5)
+    assert capsys.readouterr().out == ""
+
+
+def test_the_compile_notice_is_printed_only_when_numba_compiles(capsys):
+    from numba import njit
+
+    console.configure(logging.INFO)
+
+    @njit
+    def twice(x):
+        return 2 * x
+
+    for times in (1, 0):  # compiled, then the compiled function called again
+        with console.compile_notice("a test function"):
+            assert twice(2) == 4
+        assert capsys.readouterr().out.count("compiling a test function") == times
+
+
+def test_counted_nouns_are_singular_for_one():
+    assert [console.counted(n, "week") for n in (1, 1.0, 0.5, 8)] == ["1 week", "1 week", "0.5 weeks", "8 weeks"]
+    assert console.counted(1, "mobile charger") == "1 mobile charger"
+    assert console.counted(2, "process", "processes") == "2 processes"
+
+
+def test_in_a_notebook_progress_is_tqdm_auto_s_bar_even_without_logging_set_up(monkeypatch, logger):
+    from tqdm.auto import tqdm as auto
+
+    monkeypatch.setattr(console, "_in_notebook", lambda: True)
+    logger.setLevel(logging.NOTSET)  # dronefleet used as a library: no level set
+    with console.progress(3, "run", "  runs") as bar:
+        assert isinstance(bar, auto) and not bar.disable
+    logger.setLevel(logging.WARNING)  # quiet asked for
+    with console.progress(3, "run", "  runs") as bar:
+        assert bar.disable

@@ -53,6 +53,7 @@ def winner_grid():
 
 
 DRAWINGS = {
+    "rule_outcomes": (lambda table, path: figures.rule_outcomes(table, backlog(), path), outcomes, "delivered"),
     "delivered_vs_delivery_time": (figures.delivered_vs_delivery_time, outcomes, "delivered"),
     "aborted_by_tau": (figures.aborted_by_tau, outcomes, "aborted_pct"),
     "backlog_bars": (figures.backlog_bars, backlog, "backlog_age_s"),
@@ -187,3 +188,15 @@ def test_threshold_table_files(tmp_path):
     assert lines[0].startswith("| theta (%) | runs | delivered (mean) |")
     assert lines[2] == "| 50 | 120 | 2500.2 | 2490.0 | 90.0 | 12.50 | 800.0 | 30.0 |  |"
     assert lines[3] == "| 80 | 120 | 3100.0 | 3105.5 | 30.0 | 1.25 | 200.0 | 3.0 | yes |"
+
+
+@pytest.mark.parametrize("name", DRAWINGS)
+def test_each_drawing_is_a_column_or_page_wide_with_no_text_below_7_pt(name, tmp_path, drawn_figures):
+    # the panels drawn alone too, not only the study's figures (tests/test_paper_figures.py)
+    draw, table, _ = DRAWINGS[name]
+    kept = drawn_figures(figures)
+    draw(table(), tmp_path / name)
+    (fig,) = kept
+    assert fig.get_size_inches()[0] in (figstyle.SINGLE_COLUMN, figstyle.DOUBLE_COLUMN)
+    sizes = [text.get_fontsize() for text in fig.findobj(matplotlib.text.Text) if text.get_text().strip()]
+    assert sizes and min(sizes) >= figstyle.MIN_FONT_SIZE

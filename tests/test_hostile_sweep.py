@@ -3,7 +3,7 @@
 Every hostile job-array variable, flag and sweep file ends with exit code 2 and a one-line
 message naming the value and what is allowed, before any run: nothing is written. A
 failure record that cannot be written does not stop the sweep; grid keys in another order
-give the same sweep and one partition layout; workers and the resource tracker end when
+give the same sweep and one partition layout; workers and the resource trackers end when
 the sweep's process is killed.
 """
 
@@ -416,7 +416,7 @@ def test_a_killed_sweep_leaves_no_worker_and_no_resource_tracker(tmp_path):
     started = []
     try:
         deadline = time.monotonic() + 300  # the first run compiles the engine if no cache has it
-        # two workers and the multiprocessing resource tracker, which the first worker starts
+        # two workers and the resource trackers (multiprocessing's, loky's), started with the first worker
         while len(started := _descendants(sweep.pid)) < 3 and time.monotonic() < deadline:
             assert sweep.poll() is None, "the sweep ended before it was killed"
             time.sleep(0.1)

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
-from test_replay import _refused, chromium, counters, embedded, needs_chromium
+from test_replay import _refused, chart_of, chromium, counters, embedded, needs_chromium
 
 from dronefleet import cli
 from dronefleet.items import kernel as k
@@ -156,6 +156,39 @@ def test_replay_trial_of_a_replenishment_run(tmp_path, capsys):
     assert not (tmp_path / "page.html").exists()
 
 
+@pytest.mark.parametrize("scenario, text", [
+    ("replenishment", 'scenario = "replenishment"\n[run]\ntrials = 2\nfirst_trial = 3\nticks = 300\n'),
+    ("items", RUNS["foraging"])], ids=["replenishment", "items"])
+def test_run_replay_trial_writes_the_page_of_that_trial(scenario, text, tmp_path, capsys):
+    (tmp_path / "c.toml").write_text(text)
+    run = tmp_path / "run"
+    last = 4  # the last of trials 3-4 and 2-4
+    assert cli.main(["run", str(tmp_path / "c.toml"), "--out", str(run), "--replay", "--trial", str(last)]) == 0
+    data = embedded(run / REPLAY_FILE)
+    assert f"trial {last} of" in data["title"]
+    column = "work" if scenario == "replenishment" else "served"
+    assert data[column][-1] == summary_of(run).loc[last, column]
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--replay", "--trial", "5"], "--trial 5: the run holds trials 3 to 4"),
+    (["--replay", "--trial", "2"], "--trial 2: the run holds trials 3 to 4"),
+    (["--trial", "4"], "--trial 4 chooses the trial of the replay page: give it with --replay"),
+])
+def test_run_replay_trial_out_of_range_is_refused_before_the_run(argv, fragment, tmp_path, capsys, monkeypatch):
+    (tmp_path / "r.toml").write_text('scenario = "replenishment"\n[run]\ntrials = 2\nfirst_trial = 3\nticks = 300\n')
+    module = importlib.import_module("dronefleet.replenishment.simulate")
+    monkeypatch.setattr(module, "simulate", lambda *a, **kw: pytest.fail("the run was simulated"))
+    _refused(capsys, ["run", str(tmp_path / "r.toml"), "--out", str(tmp_path / "run"), *argv], fragment)
+    assert not (tmp_path / "run").exists()
+
+
+def test_run_replay_trial_of_a_delivery_run_is_refused_before_the_run(tmp_path, capsys):
+    _refused(capsys, ["run", "--set", "horizon_weeks=0.01", "--out", str(tmp_path / "run"), "--replay", "--trial", "1"],
+             "--trial 1: a delivery run is one replicate")
+    assert not (tmp_path / "run").exists()
+
+
 def test_replay_trial_of_a_delivery_run_is_refused(tmp_path, capsys):
     run = tmp_path / "run"
     assert cli.main(["run", "--set", "horizon_weeks=0.01", "--set", "n_uavs=2", "--out", str(run)]) == 0
@@ -248,3 +281,8 @@ def test_the_page_plays_in_chromium_without_errors(name, runs, tmp_path):
     assert shown["step"] == str(steps)
     assert shown["foraged" if name == "logistic" else "served"] == f"{int(summary['served']):,}"
     assert shown["net growth (A19)" if name == "logistic" else "generated"] == f"{int(summary['generated']):,}"
+    # the side chart: the served share (logistic: foraged) over the steps, on labelled axes
+    axes, paths = chart_of(dom)
+    assert axes["x"][1] == ["step"] and axes["x"][0][0] == 0 and axes["x"][0][-1] <= steps
+    assert axes["y"][1] == ["foraged [items]" if name == "logistic" else "served [% of generated]"]
+    assert len(paths) == 1 and paths[0].count("M") == 1

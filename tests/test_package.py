@@ -88,6 +88,16 @@ def test_the_installed_copy_finds_its_configs_and_says_its_version(installed):
     assert out.endswith("\n25\n")  # the sweep's base, ../paper.toml, was found beside it
 
 
+def test_the_installed_copy_lists_and_takes_its_shipped_files_by_name(installed):
+    site, elsewhere = installed
+    shipped = site / "dronefleet" / "configs"
+    listed = _python(["-m", "dronefleet", "configs"], elsewhere, site)
+    assert f"(in {shipped})" in listed and f"(in {shipped / 'sweeps'})" in listed and "\n  rules " in listed
+    assert _python(["-m", "dronefleet", "bounds"], elsewhere, site).startswith("dronefleet bounds: replenishment,")
+    _python(["-m", "dronefleet", "sweep", "plan", "rules", "--results", "plans"], elsewhere, site)
+    assert str(shipped / "sweeps" / "rules.toml") in (elsewhere / "plans" / "rules" / "rules.sbatch").read_text()
+
+
 def test_python_dash_m_dronefleet_runs_from_another_directory(installed):
     site, elsewhere = installed
     out = _python(["-m", "dronefleet", "run", "--set", "horizon_weeks=0.02", "--set", "n_uavs=3", "--out", "X"],

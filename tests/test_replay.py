@@ -415,3 +415,59 @@ def test_a_special_file_at_out_is_refused_not_replaced(tmp_path, capsys, deliver
     _refused(capsys, ["replay", str(delivery_run), "--out", str(pipe)],
              f"--out {str(pipe)!r} is a named pipe (FIFO), which writing would replace with a regular file")
     assert pipe.is_fifo() and [p.name for p in tmp_path.iterdir()] == ["page.html"]
+
+
+def chart_of(dom):
+    """The overview chart of a dumped page: {axis: ([tick values], label)} for "x" and "y", and
+    the ``d`` of its series path."""
+    svg = re.search(r'<svg id="chart".*?</svg>', dom, re.S)[0]
+    axes = {}
+    for name in ("x", "y"):
+        group = re.search(rf'<g class="axis {name}">(.*?)</g>', svg, re.S)[1]
+        texts = re.findall(r'<text( class="label")?[^>]*>([^<]*)</text>', group)
+        axes[name] = ([float(text.replace(",", "")) for label, text in texts if not label],
+                      [text for label, text in texts if label])
+    return axes, re.findall(r'<path class="series" d="([^"]*)"', svg)
+
+
+@needs_chromium
+@pytest.mark.parametrize("run, x_label, y_label, x_end", [
+    ("delivery_run", "time [h]", "unallocated [orders]", 0.1 * 168),
+    ("replenishment_run", "time [s]", "stored [energy units]", 90.0)])
+def test_the_chart_has_axes_with_values_and_units_and_one_continuous_line(run, x_label, y_label, x_end, request,
+                                                                          tmp_path):
+    run_dir = request.getfixturevalue(run)
+    axes, paths = chart_of(chromium(run_dir / REPLAY_FILE, "t=10", ["--dump-dom"], tmp_path / "profile"))
+    (x_ticks, x_labels), (y_ticks, y_labels) = axes["x"], axes["y"]
+    assert x_labels == [x_label] and y_labels == [y_label]
+    # round, ascending values from the start of the run to no later than its end
+    assert x_ticks[0] == 0 and len(x_ticks) >= 3 and x_ticks == sorted(x_ticks) and x_ticks[-1] <= x_end
+    data = embedded(run_dir / REPLAY_FILE)
+    values = data["queue"]["orders"] if run == "delivery_run" else data["stored"]
+    assert y_ticks[0] <= min(values) and y_ticks[-1] >= max(values) and len(y_ticks) >= 3
+    # one path, started once: a line, not dots or bars per pixel column
+    assert len(paths) == 1 and paths[0].count("M") == 1 and paths[0].count("L") >= 20
+
+
+def _vermillion_pixels(shot):
+    """How many pixels of the map (left of the side panel) of screenshot ``shot`` are the
+    vermillion of the battery-empty mark."""
+    from matplotlib.image import imread
+
+    rgb = imread(shot)[:, :880, :3] * 255
+    return int((np.abs(rgb - [213, 94, 0]).max(axis=2) < 40).sum())
+
+
+@needs_chromium
+def test_an_empty_battery_is_marked_visibly(replenishment_run, tmp_path):
+    data = replenishment_data(replenishment_run)
+    n = data["n_workers"] + data["n_chargers"]
+    # worker 0 and the last charger empty at every frame: the darkest colour of the scale
+    data["energy"] = [0.0 if i % n in (0, n - 1) else e for i, e in enumerate(data["energy"])]
+    page = tmp_path / "empty.html"
+    page.write_text(replay.page(data, replay.scenario_of_run(replenishment_run).replay_script))
+    counts = []
+    for source in (page, replenishment_run / REPLAY_FILE):
+        chromium(source, "t=40", [f"--screenshot={tmp_path / 'shot.png'}"], tmp_path / "profile")
+        counts.append(_vermillion_pixels(tmp_path / "shot.png"))
+    assert counts[0] >= 2 * 20 and counts[1] == 0, counts  # a mark of tens of pixels per empty robot, none else

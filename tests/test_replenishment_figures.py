@@ -3,13 +3,16 @@
 
 import importlib
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 import pytest
 
 from dronefleet import cli, figstyle, reproduce, sweeps
-from dronefleet.replenishment import Params, bounds, experiments, study
+from dronefleet.datafiles import read_parquet
+from dronefleet.replenishment import Params, bounds, experiments, fixed_work_ceiling, study
 from dronefleet.replenishment import figures as rfigures
 
 simulate_module = importlib.import_module("dronefleet.replenishment.simulate")  # the package exports the function
@@ -229,3 +232,38 @@ def test_the_figures_have_no_titles_and_each_strategy_its_own_colour_and_marker(
     assert (fixed.get_color(), mobile.get_color()) == (figstyle.STRATEGY_STYLES["fixed"].colour,
                                                        figstyle.STRATEGY_STYLES["mobile"].colour)
     assert fixed.get_marker() != mobile.get_marker()  # apart in greyscale too
+
+
+# ---------------------------------------------------------------- the committed figures against the bounds
+
+RESULTS = Path(__file__).resolve().parents[1] / "results"
+
+
+def committed(figure, table):
+    """The committed ``results/<figure>/<table>.parquet`` as pandas, through the project's reader."""
+    def number(arrow_type):
+        return pa.types.is_integer(arrow_type) or pa.types.is_floating(arrow_type)
+
+    metrics = ("bound_work", "bound_efficiency") if table == "bounds" else ("work", "efficiency_with_loss")
+    columns = {**dict.fromkeys((*experiments.CONFIG_COLUMNS[1:], *metrics), number), "strategy": reproduce.flat}
+    return read_parquet(RESULTS / figure / f"{table}.parquet", columns).to_pandas()
+
+
+def test_every_committed_fig12_mean_lies_below_its_bound_and_the_drawn_bound_is_e_cs():
+    runs = committed("fig12", "runs")
+    means = runs[runs.strategy == "mobile"].groupby("transfer_loss")[["work", "efficiency_with_loss"]].mean()
+    assert list(means.index) == pytest.approx([0.1 * i for i in range(10)])
+    drawn = committed("fig12", "bounds").set_index(["strategy", "transfer_loss"])
+    for loss, mean in means.iterrows():
+        limit = bounds(Params(strategy="mobile", n_chargers=6, transfer_loss=loss))
+        assert 0.0 < mean.efficiency_with_loss < limit.efficiency, loss
+        assert mean.work < limit.work, loss
+        assert drawn.loc[("mobile", loss), "bound_efficiency"] == limit.efficiency  # the line of Fig 12b
+
+
+def test_no_committed_fixed_trial_exceeds_the_strict_work_ceiling():
+    # the per-cycle W_fix may be exceeded by part of a cycle (Fig 11, k = 0.1); the ceiling may not
+    for figure in ("fig10", "fig11", "fig12"):
+        runs = committed(figure, "runs")
+        for (r, k), trials in runs[runs.strategy == "fixed"].groupby(["work_ratio", "charge_rate"]):
+            assert trials.work.max() <= fixed_work_ceiling(Params(work_ratio=r, charge_rate=k)), (figure, r, k)

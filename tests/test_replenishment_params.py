@@ -4,7 +4,7 @@ import pytest
 
 from dronefleet.config import ConfigError
 from dronefleet.replenishment import (BoundUndefinedError, Params, ParamsError,
-                                      constant_supply_bounds, fixed_bounds)
+                                      constant_supply_bounds, fixed_bounds, fixed_work_ceiling)
 from dronefleet.replenishment.params import BASE_CAPACITY
 
 
@@ -33,8 +33,29 @@ def test_bounds_follow_the_rates():
     d_charge_cs = 100.0 / (0.5 - 0.005)
     d_work_cs = 100.0 / 0.105
     assert lossy.work == pytest.approx(6 * 6000 * d_work_cs / (d_work_cs + d_charge_cs), rel=1e-12)
+    # the loss counts in the denominator, as Fig 12's efficiency counts it
     assert lossy.efficiency == pytest.approx(
-        1.0 - (0.005 * (d_work_cs + d_charge_cs) + 0.5 * 1.0 * d_charge_cs) / 100.0, rel=1e-12)
+        (100.0 - 0.005 * (d_work_cs + d_charge_cs)) / (100.0 + 0.5 * 1.0 * d_charge_cs), rel=1e-12)
+
+
+@pytest.mark.parametrize("transfer_loss, efficiency", [
+    (0.0, 0.9474), (0.1, 0.852), (0.2, 0.756), (0.3, 0.660), (0.4, 0.565), (0.5, 0.469), (0.6, 0.373),
+    (0.7, 0.277), (0.8, 0.182), (0.9, 0.086)])
+def test_e_cs_is_the_check_value_of_the_spec_at_every_loss_of_fig12(transfer_loss, efficiency):
+    supply = constant_supply_bounds(Params(strategy="mobile", n_chargers=6, transfer_loss=transfer_loss))
+    # the spec rounds 4 decimals to 3 (0.5645 -> 0.565): half a unit of the third and a little
+    assert supply.efficiency == pytest.approx(efficiency, abs=6e-4 if transfer_loss else 5e-5)
+    # the paper's form, just below the strict long-run ceiling of the simulated ratio
+    ceiling = 1.0 / (0.005 + 0.1) * 0.1 * (1.0 - transfer_loss - 0.005 / 1.0)
+    assert 0.0 < supply.efficiency < ceiling <= supply.efficiency + 0.005
+
+
+@pytest.mark.parametrize("charge_rate, ceiling", [(1.0, 27_609), (0.1, 16_600)])
+def test_the_strict_work_ceiling_within_t_ticks_is_the_spec_value_and_above_w_fix(charge_rate, ceiling):
+    params = Params(charge_rate=charge_rate)
+    assert fixed_work_ceiling(params) == pytest.approx(ceiling, abs=0.5)
+    assert fixed_work_ceiling(params) > fixed_bounds(params).work
+    assert fixed_work_ceiling(Params(ticks=80)) == 0.0  # the first commute takes 83.3 ticks
 
 
 def test_bounds_do_not_depend_on_the_chargers():

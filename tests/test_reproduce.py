@@ -1,6 +1,7 @@
 """``dronefleet reproduce``: every figure in quick mode, its tidy tables, redrawing without simulating,
 and where it writes (``--out``, by default not the committed results; ``--update-results``)."""
 
+import runpy
 import shutil
 import subprocess
 import sys
@@ -20,8 +21,8 @@ FORMATS = ("png", "pdf", "svg")
 #: The delivery and replenishment figures (the items study's are tested in test_items_study.py:
 #: their quick run alone takes minutes).
 FIGURES = (*reproduce.DELIVERY_FIGURES, *reproduce.REPLENISHMENT_FIGURES)
-DRAWINGS = {"fig16": ["fig16a", "fig16b", "fig16c"], "fig17": ["fig17"], "fig18": ["fig18"],
-        "fig19": ["fig19a", "fig19b", "fig19c"], "fig20": ["fig20"],
+DRAWINGS = {"fig16": ["fig16"], "fig17": ["fig17"], "fig18": ["fig18"],
+        "fig19": ["fig19"], "fig20": ["fig20"],
         **{figure: [figure] for figure in reproduce.REPLENISHMENT_FIGURES}}
 TABLES = {"fig16": ["outcomes", "backlog"], "fig17": ["accuracy"], "fig18": ["winner_soh"],
           "fig19": ["thresholds", "outcomes", "backlog"], "fig20": ["pending"],
@@ -160,11 +161,24 @@ def test_redraw_without_tables_says_what_to_run(tmp_path, capsys):
     assert "run dronefleet reproduce fig17 without --redraw first" in capsys.readouterr().err
 
 
-def test_the_experiments_scripts_reach_the_same_command():
-    for figure in FIGURES:
-        script = ROOT / "experiments" / f"{figure}.py"
-        out = subprocess.run([sys.executable, str(script), "--help"], capture_output=True, text=True, check=True)
-        assert "dronefleet reproduce" in out.stdout
+def test_every_figure_of_every_study_has_its_experiments_script(tmp_path, monkeypatch, capsys):
+    """``experiments/<figure>.py`` for each figure of ``reproduce --list``, a link to reproduce.py that
+    reaches that figure: asked to redraw where no tables are, it is refused naming the figure."""
+    scripts = ROOT / "experiments"
+    assert sorted(p.stem for p in scripts.glob("*.py")) == sorted((*reproduce.FIGURES, "reproduce"))
+    for figure in reproduce.FIGURES:
+        script = scripts / f"{figure}.py"
+        assert script.resolve() == (scripts / "reproduce.py").resolve()
+        monkeypatch.setattr(sys, "argv", [str(script), "--redraw", "--out", str(tmp_path)])
+        with pytest.raises(SystemExit) as stop:  # in this process: one interpreter start per figure is seconds
+            runpy.run_path(str(script), run_name="__main__")
+        assert stop.value.code == 2
+        assert f"run dronefleet reproduce {figure} without --redraw first" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())
+    # one as a user runs it, in its own process
+    done = subprocess.run([sys.executable, str(scripts / "items-ttests.py"), "--redraw", "--out", str(tmp_path)],
+                          capture_output=True, text=True)
+    assert done.returncode == 2 and "run dronefleet reproduce items-ttests without --redraw first" in done.stderr
 
 
 def test_quick_sweeps_are_the_study_sweeps_with_fewer_seeds_and_weeks(tmp_path):

@@ -137,6 +137,44 @@ def test_an_installed_scenario_named_like_a_built_in_is_refused(tmp_path, monkey
     assert scenarios.get("delivery") is scenarios.SCENARIOS["delivery"]  # the built-in is what a config runs
 
 
+@pytest.mark.parametrize("text", [
+    "raise RuntimeError('no licence server')\n",
+    WALK.replace("\ndef simulate(config):", "\ndef simulated(config):"),  # imports, breaks the contract
+])
+def test_a_broken_installed_scenario_breaks_only_what_names_it(tmp_path, monkeypatch, capsys, text):
+    name = next(NAMES)
+    install(tmp_path, name, f"{name}_module", f"{name}_module", text.replace('NAME = "random_walk"', f'NAME = "{name}"'))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    entry = f"the {ENTRY_POINT_GROUP} entry point '{name}' ({name}_module)"
+    # the built-in studies are listed; the broken one is left out, said in one line on stderr
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(map(str, (tmp_path, ROOT)))}
+    listed = subprocess.run([sys.executable, "-m", "dronefleet.cli", "reproduce", "--list"], capture_output=True,
+                            text=True, env=env, cwd=tmp_path, timeout=300)
+    assert listed.returncode == 0, listed.stderr
+    assert "fig16" in listed.stdout and "fig09" in listed.stdout and "items-ttests" in listed.stdout
+    assert len(listed.stderr.splitlines()) == 1 and entry in listed.stderr and "left out" in listed.stderr
+
+    def own_refusal(argv, fragment):  # the command's own one-line error; at most the warning beside it
+        assert cli.main([str(arg) for arg in argv]) == 2
+        *warned, error = capsys.readouterr().err.splitlines()
+        assert fragment in error and entry not in error and all("left out" in line for line in warned)
+
+    # a built-in figure reaches its own check (no tables to redraw), not the broken scenario
+    own_refusal(["reproduce", "fig17", "--redraw", "--out", tmp_path / "results"],
+                "run dronefleet reproduce fig17 without --redraw first")
+    # a built-in config's own refusal names the scenarios with bounds, not the broken one's error
+    own_refusal(["bounds", ROOT / "configs" / "items.toml"], "analytic bounds exist only for replenishment")
+    # a built-in run and its replay page
+    run = tmp_path / "run"
+    assert cli.main(["run", str(ROOT / "configs" / "replenishment.toml"), "--set", "trials=1", "--set", "ticks=100",
+                     "--out", str(run)]) == 0
+    assert cli.main(["replay", str(run), "--out", str(tmp_path / "page.html")]) == 0
+    assert (tmp_path / "page.html").is_file()
+    # what names the broken scenario is refused in one line naming it
+    refused(capsys, ["run", config_file(tmp_path, name), "--out", tmp_path / "out"], entry)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("named", ["sidefx", "sidefx:simulate", "dronefleet.delivery.scenario", "os"])
 def test_a_config_selects_a_registered_scenario_never_a_module(tmp_path, monkeypatch, capsys, named):
     (tmp_path / "sidefx.py").write_text(f"open({str(tmp_path / 'imported')!r}, 'w').close()\n")

@@ -171,6 +171,23 @@ def test_run_writes_one_summary_row_per_trial_and_the_time_series(tmp_path, caps
     assert f"{work.mean():,.1f}" in printed and f"{work.std(ddof=1):,.1f}" in printed
 
 
+def test_a_fixed_summary_above_the_per_cycle_w_fix_names_the_strict_ceiling():
+    # at k = 0.1 a trial holds 2.99 cycles; leaving the charger early fits part of a fourth
+    from dronefleet.replenishment import scenario
+
+    config = scenarios.SCENARIOS["replenishment"].load(REPLENISHMENT, ["strategy=fixed", "n_chargers=0",
+                                                                       "charge_rate=0.1", "trials=2"])
+    columns = {name: [1.0, 2.0] for name in scenario.summary_columns()}
+    columns["work"] = [14_136.0, 14_000.0]  # W_fix = 14,108
+    table = records.arrow_table(columns, {records.CONFIG_KEY: config.to_json()})
+    printed = scenario.format_summary({"summary": table})
+    assert "14,108 (W_fix)" in printed
+    assert "strict ceiling within them is 16,600" in printed
+    columns["work"] = [14_000.0, 14_000.0]
+    table = records.arrow_table(columns, {records.CONFIG_KEY: config.to_json()})
+    assert "ceiling" not in scenario.format_summary({"summary": table})
+
+
 def test_set_overrides_reach_the_run_and_its_metadata(tmp_path, capsys):
     out = _run(tmp_path, "strategy=fixed", "n_chargers=0", "work_ratio=2")
     config = scenarios.SCENARIOS["replenishment"].read_config(out / "summary.parquet")
@@ -217,6 +234,7 @@ def test_bounds_at_the_defaults_are_the_spec_s(capsys):
     rows = _bounds_printed(capsys)
     assert (rows["W_fix"], rows["E_fix"], rows["W_cs"], rows["E_cs"]) == ("26,865", "0.7807", "32,564", "0.9474")
     assert (rows["D"], rows["D_c"]) == ("0.74625", "83.33")
+    assert rows["W_fix,T"] == "27,609"  # the strict ceiling within T ticks (spec section 9)
     for name in ("D_charge", "D_work", "D_cycle", "D_charge,cs", "D_work,cs"):
         assert float(rows[name]) > 0
 
@@ -226,6 +244,12 @@ def test_bounds_follow_set(capsys):
     p = Params(strategy="mobile", n_chargers=6, work_ratio=2.0, transfer_loss=0.5)
     assert rows["W_fix"] == f"{fixed_bounds(p).work:,.0f}" != "26,865"
     assert rows["E_cs"] == f"{constant_supply_bounds(p).efficiency:.4f}" != "0.9474"
+
+
+def test_e_cs_with_a_large_loss_is_a_positive_bound(capsys):
+    # it was 1 - (lost energy per cycle) / c_w: -0.5793 at lambda = 0.6, below every simulated mean
+    rows = _bounds_printed(capsys, "--set", "transfer_loss=0.6")
+    assert rows["E_cs"] == "0.3731"
 
 
 @pytest.mark.parametrize("args, why", [

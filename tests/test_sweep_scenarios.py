@@ -1,7 +1,7 @@
 """Sweeps on the scenario contract: every registered scenario through plan, a job-array task,
 status, the other runs, collect and the typed dataset; ``[[grid]]`` unions and refused
-duplicates; replenishment sweeps interrupted and resumed, refused when their config changed,
-and run on Dask like delivery's."""
+duplicates; replenishment sweeps interrupted and resumed, refused when their config changed;
+replenishment and items sweeps run as job-array tasks and on Dask into the dataset of a local run."""
 
 import json
 
@@ -228,13 +228,25 @@ def test_a_replenishment_run_made_with_another_config_is_refused_not_mixed(tmp_p
         assert len(err.splitlines()) == 1 and "was made with another config (ticks 200 vs 300)" in err
 
 
-def test_dask_runs_a_replenishment_sweep_into_the_same_dataset(tmp_path, capsys, no_array):
-    path = write(tmp_path, REPLENISHMENT)
-    tables = scenarios.SCENARIOS["replenishment"].tables
+@pytest.mark.parametrize("name", ["replenishment", "items"])  # delivery's: test_sweep.py (smoke.toml)
+def test_job_array_tasks_and_dask_write_the_dataset_of_a_local_run(name, tmp_path, monkeypatch, capsys, no_array):
+    path = write(tmp_path, TINY[name])
+    tables = scenarios.SCENARIOS[name].tables
     assert cli.main(["sweep", "run", str(path), "--results", str(tmp_path / "local"), "--jobs", "1"]) == 0
+    for task in ("0", "1"):  # what the job array's script runs, task by task
+        monkeypatch.setenv("SLURM_ARRAY_TASK_ID", task)
+        assert cli.main(["sweep", "run", str(path), "--results", str(tmp_path / "array")]) == 0
+    monkeypatch.delenv("SLURM_ARRAY_TASK_ID")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None) as cluster:
         assert cli.main(["sweep", "run", str(path), "--results", str(tmp_path / "dask"), "--executor", "dask",
                          "--scheduler", cluster.scheduler_address]) == 0
-    assert table_files(tmp_path / "dask" / "tiny", tables) == table_files(tmp_path / "local" / "tiny", tables)
-    assert len(table_files(tmp_path / "dask" / "tiny", tables)) == 2 * 4
+    local = tmp_path / "local" / "tiny"
+    files = table_files(local, tables)
+    assert len(files) == len(tables) * 4
+    for results in ("local", "array", "dask"):
+        assert cli.main(["sweep", "collect", str(path), "--results", str(tmp_path / results)]) == 0
+        out = tmp_path / results / "tiny"
+        assert table_files(out, tables) == files
+        assert (out / "collected.parquet").read_bytes() == (local / "collected.parquet").read_bytes()
+    assert len(pd.read_parquet(local / "collected.parquet")) == 4 * 2  # a row per trial

@@ -1,6 +1,6 @@
 """A real SLURM: the job-array script of `sweep plan`, submitted to a one-node cluster on
-this machine, writes the very dataset that a local `sweep run` writes, for a delivery and a
-replenishment sweep.
+this machine, writes the very dataset that a local `sweep run` writes, for a delivery, a
+replenishment and an items sweep.
 
 Needs Debian's slurm-wlm and munge (`.ci/run` installs them) and root, to start the
 daemons; skipped, saying which is missing, otherwise. ``tests/slurm/cluster.sh`` starts
@@ -86,10 +86,11 @@ def test_the_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkey
     assert len(table_files(local)) == len(TABLES) * 8
 
 
-def test_a_replenishment_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkeypatch):
+@pytest.mark.parametrize("name", ["replenishment", "items"])
+def test_a_job_array_of_another_scenario_writes_the_dataset_of_a_local_run(name, slurm, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     path = tmp_path / "tiny.toml"
-    path.write_text(TINY_SWEEPS["replenishment"])
+    path.write_text(TINY_SWEEPS[name])
     assert cli.main(["sweep", "plan", str(path), "--results", "slurm"]) == 0
     logs, printed = submit(slurm, tmp_path / "slurm" / "tiny")
     assert len(logs) == 2 and printed.count("ran 2, skipped 0") == 2
@@ -99,7 +100,8 @@ def test_a_replenishment_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_
         assert cli.main(["sweep", "collect", str(path), "--results", results]) == 0
     on_slurm, local = tmp_path / "slurm" / "tiny", tmp_path / "local" / "tiny"
     assert len(pd.read_parquet(on_slurm / "collected.parquet")) == 4 * 2  # a row per trial
-    tables = SCENARIOS["replenishment"].tables
+    assert (on_slurm / "collected.parquet").read_bytes() == (local / "collected.parquet").read_bytes()
+    tables = SCENARIOS[name].tables
     files = table_files(local, tables)
     assert table_files(on_slurm, tables) == files
     assert len(files) == len(tables) * 4

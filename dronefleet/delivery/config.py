@@ -54,6 +54,7 @@ from typing import Any
 from collections.abc import Iterable, Mapping
 
 from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
+from ..console import counted
 
 __all__ = [
     "SECTIONS",
@@ -635,4 +636,4 @@ def replace(config: Config, **changes: Any) -> Config:
 def describe(config: Config) -> str:
     """One line naming the run (the head of ``dronefleet run``, the replay page's title)."""
     return (f"seed {config.seed}, rule {config.rule}, tau {config.tau_minutes:g} min, "
-            f"{config.n_uavs} UAVs, {config.horizon_weeks:g} weeks")
+            f"{counted(config.n_uavs, 'UAV')}, {counted(config.horizon_weeks, 'week')}")

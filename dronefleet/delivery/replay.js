@@ -33,11 +33,6 @@ function makeScene(d) {
     return { flight: -1, soc: f.soc1[k] + (f.soc0[k + 1] - f.soc1[k]) * charged, lost: false };
   }
 
-  function niceStep(span) {
-    const power = 10 ** Math.floor(Math.log10(span)), scaled = span / power;
-    return power * (scaled < 2 ? 1 : scaled < 5 ? 2 : 5);
-  }
-
   function cross(ctx, x, y, size) {
     ctx.beginPath();
     ctx.moveTo(x - size, y - size); ctx.lineTo(x + size, y + size);
@@ -46,14 +41,13 @@ function makeScene(d) {
   }
 
   function draw(ctx, t, w, h, rate) {
-    const strip = Math.min(70, h * 0.15), mapH = h - strip;
+    const strip = Math.min(110, h * 0.2), mapH = h - strip;
     const cx = w / 2, cy = mapH / 2, scale = (Math.min(w, mapH) / 2 - 22) / d.radius_m;
     const at = (r, bearing) => [cx + r * scale * Math.sin(bearing), cy - r * scale * Math.cos(bearing)];
     // distance rings
-    const step = niceStep(d.radius_m / 3);
     ctx.font = "11px system-ui, sans-serif";
     ctx.lineWidth = 1;
-    for (let r = step; r <= d.radius_m * 1.001; r += step) {
+    for (const r of niceAxis(0, d.radius_m, 6, false).ticks.filter(r => r > 0)) {
       ctx.strokeStyle = "#ddd";
       ctx.beginPath(); ctx.arc(cx, cy, r * scale, 0, 2 * Math.PI); ctx.stroke();
       ctx.fillStyle = "#999";
@@ -77,8 +71,20 @@ function makeScene(d) {
     ctx.fillStyle = "#222";
     ctx.fillRect(cx - 7, cy - 7, 14, 14);
     ctx.fillText("FC", cx + 10, cy + 4);
-    // UAVs: in the air on the map, all in the strip
-    const cell = Math.min(36, (w - 20) / n), barH = strip - 30;
+    // UAVs: in the air on the map, all in the strip: a bar per UAV on a 0-100 % scale, its
+    // number below (every k-th, where they would overlap) and its SoC above (where it fits)
+    const left = 46, cell = Math.min(36, (w - left - 10) / n), top = mapH + 24, barH = strip - 42;
+    ctx.fillStyle = "#444"; ctx.strokeStyle = "#444"; ctx.lineWidth = 1;
+    ctx.fillText("State of charge per UAV [%] (thick outline: in flight, \u2715: lost)", left, mapH + 10);
+    ctx.textAlign = "right";
+    for (const v of [0, 50, 100]) {
+      const y = top + barH * (1 - v / 100);
+      ctx.beginPath(); ctx.moveTo(left - 4, y); ctx.lineTo(left, y); ctx.stroke();
+      ctx.fillText(String(v), left - 6, y + 4);
+    }
+    ctx.fillText("UAV", left - 6, top + barH + 13);
+    ctx.textAlign = "center";
+    const every = Math.ceil((ctx.measureText(String(n - 1)).width + 4) / cell), values = cell >= 24;
     for (let u = 0; u < n; u++) {
       const s = uavAt(u, t), colour = s.soc === null ? "#ccc" : colourOf(s.soc / 100);
       if (s.flight >= 0 && !s.lost) {
@@ -93,7 +99,7 @@ function makeScene(d) {
         const k = s.flight, [x, y] = at(f.end_m[k], f.bearing[k]);
         ctx.strokeStyle = "#000"; ctx.lineWidth = 2; cross(ctx, x, y, 6);
       }
-      const x0 = 10 + u * cell, y0 = mapH + 6;
+      const x0 = left + u * cell, y0 = top;
       ctx.strokeStyle = s.flight >= 0 && !s.lost ? "#222" : "#aaa";
       ctx.lineWidth = s.flight >= 0 && !s.lost ? 2 : 1;
       ctx.strokeRect(x0 + 2, y0, cell - 4, barH);
@@ -103,8 +109,14 @@ function makeScene(d) {
       }
       if (s.lost) { ctx.strokeStyle = "#000"; cross(ctx, x0 + cell / 2, y0 + barH / 2, cell / 4); }
       ctx.fillStyle = "#444";
-      ctx.fillText(String(u), x0 + cell / 2 - ctx.measureText(String(u)).width / 2, y0 + barH + 13);
+      if (u % every === 0) ctx.fillText(String(u), x0 + cell / 2, y0 + barH + 13);
+      if (values && s.soc !== null) {
+        ctx.font = "9px system-ui, sans-serif";
+        ctx.fillText(s.lost ? "lost" : String(Math.round(s.soc)), x0 + cell / 2, y0 - 3);
+        ctx.font = "11px system-ui, sans-serif";
+      }
     }
+    ctx.textAlign = "left";
   }
 
   function counters(t) {
@@ -130,7 +142,9 @@ function makeScene(d) {
     draw, counters, formatTime,
     speeds: [["1 min/s", 60], ["10 min/s", 600], ["1 h/s", 3600], ["6 h/s", 21600], ["1 day/s", 86400]],
     speed: 2,
-    chart: { label: "Order queue (unallocated orders) over the run", t: d.queue.t_s, v: d.queue.orders },
+    chart: { label: "Order queue over the run", t: d.queue.t_s, v: d.queue.orders,
+             x: d.duration_s >= 2 * 86400 ? { label: "time [days]", per: 86400 } : { label: "time [h]", per: 3600 },
+             y: { label: "unallocated [orders]" } },
     colour: { label: "UAV state of charge [%]", min: "0", max: "100" },
     legend: [["\u25cf", "#222", "UAV in flight (thick ring: outbound)"], ["\u2715", ABORT, "attempt aborted"],
              ["\u2022", DONE, "parcel delivered"], ["\u2715", "#000", "UAV lost"],

@@ -17,6 +17,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..console import counted
 from ..contract import Field
 from .config import (PARAMETERS, AnyText, Config, Interval, Options, default_config, describe, load_config,
                      resolve_key)
@@ -27,7 +28,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
            "replace", "value", "read_config", "table_schemas", "simulate", "outdated", "format_summary",
-           "format_metrics", "describe", "label", "replay_data"]
+           "format_metrics", "describe", "label", "replay_data", "check_replayable"]
 
 NAME = "delivery"
 TABLES = ("orders", "attempts", "fleet", "timeseries", "summary")  # = dronefleet.delivery.records.TABLES
@@ -114,6 +115,15 @@ def _duration(seconds):
     return f"{int(hours)} h {rest / 60.0:04.1f} min"
 
 
+def _backlog(age_s: float, pending: int) -> str:
+    """The cumulative backlog age (the study's metric: the ages of the pending orders at the horizon,
+    summed) in days, and their mean age."""
+    if not pending:
+        return "0.0 days (no order pending)"
+    return (f"{age_s / 86400.0:,.1f} days over {counted(pending, 'pending order')}, "
+            f"{age_s / 86400.0 / pending:.1f} days each on average")
+
+
 def format_metrics(m: dict, wall_s: float | None = None) -> str:
     """The run's summary as printed by ``dronefleet run`` (``m`` from :func:`~dronefleet.delivery.metrics.run_metrics`;
     the wall time line only if ``wall_s`` is given)."""
@@ -123,7 +133,7 @@ def format_metrics(m: dict, wall_s: float | None = None) -> str:
         ("delivered", f"{m['delivered']} ({delivered_pct:.1f} %)"),
         ("median delivery time", f"{_duration(m['median_delivery_time_s'])} ({m['median_delivery_time_s']:.0f} s)"),
         ("aborted attempts", f"{m['aborted_pct']:.1f} % ({m['aborted_attempts']} of {m['attempts']})"),
-        ("backlog age", f"{m['backlog_age_s'] / 86400.0:.1f} days over {m['pending']} pending orders"),
+        ("backlog age (summed)", _backlog(m['backlog_age_s'], m['pending'])),
         ("lost UAVs", f"{m['lost_uavs']}"),
         ("decision accuracy", f"{100.0 * m['decision_accuracy']:.1f} % (fleet mean at the end)"),
     ]
@@ -149,3 +159,10 @@ def replay_data(run_dir: Path) -> dict[str, Any]:
     from .replay import replay_data as data
 
     return data(run_dir)
+
+
+def check_replayable(config: Config) -> None:
+    """Refuse ``run --replay`` of a run whose page would be too large (:mod:`dronefleet.delivery.replay`)."""
+    from .replay import check_replayable as check
+
+    check(config)

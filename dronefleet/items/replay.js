@@ -67,14 +67,6 @@ function makeScene(d) {
     }
   }
 
-  /** About five round values from 0 to top. */
-  function ticks(top) {
-    const raw = top / 5, unit = 10 ** Math.floor(Math.log10(raw)), f = raw / unit;
-    const step = (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * unit, out = [];
-    for (let v = 0; v <= top + 1e-9; v += step) out.push(v);
-    return out;
-  }
-
   function drawChart(ctx, box, k) {
     const { left, top, right, bottom } = box;
     if (right - left < 40 || bottom - top < 40) return;
@@ -82,13 +74,13 @@ function makeScene(d) {
     ctx.strokeStyle = "#444"; ctx.lineWidth = 1; ctx.fillStyle = "#444"; ctx.font = "11px system-ui, sans-serif";
     ctx.beginPath(); ctx.moveTo(left, top); ctx.lineTo(left, bottom); ctx.lineTo(right, bottom); ctx.stroke();
     ctx.textAlign = "center";
-    for (const s of ticks(steps)) {
+    for (const s of niceAxis(0, steps, 5, false).ticks) {
       ctx.beginPath(); ctx.moveTo(X(s), bottom); ctx.lineTo(X(s), bottom + 4); ctx.stroke();
       ctx.fillText(String(s), X(s), bottom + 16);
     }
     ctx.fillText("step", (left + right) / 2, bottom + 32);
     ctx.textAlign = "right";
-    for (const v of ticks(shareTop)) {
+    for (const v of niceAxis(0, shareTop, 5, false).ticks) {
       ctx.strokeStyle = "#e4e4e4"; ctx.beginPath(); ctx.moveTo(left + 1, Y(v)); ctx.lineTo(right, Y(v)); ctx.stroke();
       ctx.fillText(String(v), left - 6, Y(v) + 4);
     }
@@ -155,7 +147,8 @@ function makeScene(d) {
     formatTime: t => `step ${Math.floor(t)} of ${steps}`,
     speeds: rates.map(r => [`${r} steps/s`, r]),
     speed: Math.max(0, rates.findLastIndex(r => r <= steps / 30)),  // a run in about half a minute
-    chart: { label: logistic ? "Foraged [items]" : "Served [% of generated]", t: share.map((_, s) => s), v: share },
+    chart: { label: logistic ? "Foraged over the run" : "Served share over the run", t: share.map((_, s) => s), v: share,
+             x: { label: "step", per: 1 }, y: { label: logistic ? "foraged [items]" : "served [% of generated]" } },
     colour: { label: `Location: ${what}`, min: "0", max: countTop.toLocaleString("en") },
     legend: [["\u25a0", "#333", "home"], ["\u25cf", colourOf(0.6), `location (size, colour: ${what})`],
              ["\u25d4", ROBOT, "robot (red share, number: payload)"]],

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..config import SCENARIO_KEY, ConfigError, Sections, with_sources
+from ..console import counted
 from ..contract import Field
 from .params import KEYS, Params, allowed, check
 from .simulate import robot_columns, summary_columns
@@ -166,9 +167,9 @@ def simulate(config: Config) -> dict[str, pyarrow.Table]:
 def describe(config: Config) -> str:
     """One line naming the configuration (the head of ``run``)."""
     p = config
-    world = (f"{p.locations} random locations" if p.foraging
-             else f"{p.n_locations} grid locations (N_s {p.grid_spacing:g}, {p.grid_edge})")
-    return (f"{p.mode} ({p.truth}), {world}, {p.algorithm}: {p.n_robots} robots, capacity {p.capacity}, "
+    world = (counted(p.locations, "random location") if p.foraging
+             else f"{counted(p.n_locations, 'grid location')} (N_s {p.grid_spacing:g}, {p.grid_edge})")
+    return (f"{p.mode} ({p.truth}), {world}, {p.algorithm}: {counted(p.n_robots, 'robot')}, capacity {p.capacity}, "
             f"speed {p.speed:g}; trials {p.first_trial}-{p.first_trial + p.trials - 1} (seed {p.seed}) "
             f"x {p.steps} steps")
 
@@ -190,7 +191,7 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
             "foraging rate [% of G]" if config.foraging else "serving rate [% of G]")
     rows = (("generated G", "generated", ",.1f"), (served, "served", ",.1f"), (rate, "rate", ",.2f"),
             ("visits", "visits", ",.1f"), ("trips", "trips", ",.1f"), ("items per trip", "items_per_trip", ".3f"))
-    lines = [f"  {'over ' + str(summary.num_rows) + ' trials':<26}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"]
+    lines = [f"  {'over ' + counted(summary.num_rows, 'trial'):<26}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"]
     for text, column, fmt in rows:
         x = np.array(summary.column(column).to_pylist(), dtype=np.float64)
         x = x[~np.isnan(x)]

@@ -18,6 +18,7 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from ..config import SCENARIO_KEY, ConfigError, Sections, _show, _suggest, with_sources
+from ..console import counted
 from ..contract import Field
 from .params import BASE_CAPACITY, UPPER_LIMITS, Params
 from .simulate import TRIAL_SEED_FACTOR
@@ -187,9 +188,9 @@ def read_config(path: str | os.PathLike) -> Config:
 def describe(config: Config) -> str:
     """One line naming the configuration (the head of ``run`` and ``bounds``)."""
     p = config.params
-    chargers = (f"{p.n_chargers} mobile chargers (phi {p.charger_capacity_factor:g})" if p.mobile
+    chargers = (f"{counted(p.n_chargers, 'mobile charger')} (phi {p.charger_capacity_factor:g})" if p.mobile
                 else "fixed chargers")
-    return (f"{p.n_workers} workers, {chargers}, r {p.work_ratio:g}, k {p.charge_rate:g}, "
+    return (f"{counted(p.n_workers, 'worker')}, {chargers}, r {p.work_ratio:g}, k {p.charge_rate:g}, "
             f"lambda {p.transfer_loss:g}, trials {config.first_trial}-{config.last_trial} "
             f"(seeds {TRIAL_SEED_FACTOR} k) x {p.ticks} ticks")
 

@@ -5,6 +5,7 @@ function makeScene(d) {
   const n = d.n_workers + d.n_chargers, frames = d.work.length;
   const FILL = { base: "#cfd9e6", transfer: "#f4e2c4", work: "#d6ebd1" };
   const LABEL = { base: "base (charging)", transfer: "transfer", work: "work" };
+  const EMPTY = "#d55e00";  // vermillion, on a white halo: seen on the darkest disc and on the floor
 
   /** [frame index, weight of the next frame] at time t. */
   function frameAt(t) {
@@ -39,7 +40,11 @@ function makeScene(d) {
       ctx.fill(); ctx.stroke();
       if (fraction <= 0) {
         ctx.beginPath(); ctx.moveTo(x - size, y - size); ctx.lineTo(x + size, y + size);
-        ctx.moveTo(x - size, y + size); ctx.lineTo(x + size, y - size); ctx.stroke();
+        ctx.moveTo(x - size, y + size); ctx.lineTo(x + size, y - size);
+        ctx.lineCap = "round";
+        ctx.strokeStyle = "#fff"; ctx.lineWidth = 6; ctx.stroke();
+        ctx.strokeStyle = EMPTY; ctx.lineWidth = 3; ctx.stroke();
+        ctx.lineCap = "butt";
       }
     }
   }
@@ -66,9 +71,10 @@ function makeScene(d) {
     formatTime: t => `${t.toFixed(1)} s of ${d.duration_s.toFixed(1)} s`,
     speeds: [["1x", 1], ["2x", 2], ["5x", 5], ["10x", 10], ["30x", 30], ["100x", 100]],
     speed: 3,
-    chart: { label: "Energy stored in all batteries", t: d.work.map((_, i) => i * d.frame_s), v: d.stored },
+    chart: { label: "Energy stored in all batteries", t: d.work.map((_, i) => i * d.frame_s), v: d.stored,
+             x: { label: "time [s]", per: 1 }, y: { label: "stored [energy units]" } },
     colour: { label: "Battery [fraction of capacity]", min: "0", max: "1" },
     legend: [["\u25cf", "#222", "worker"], ...(d.n_chargers > 0 ? [["\u25a0", "#222", "mobile charger"]] : []),
-             ["\u2715", "#222", "battery empty"]],
+             ["\u2715", EMPTY, "battery empty"]],
   };
 }

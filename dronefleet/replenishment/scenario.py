@@ -44,7 +44,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .bounds import COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds
+from ..console import counted
+from .bounds import (COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds,
+                     fixed_work_ceiling)
 from .config import (DEFAULTS, NAME, SCHEMA, Config, config_from_dict, describe, label, load,
                      read_config, replace, replicates, resolve_key, value)
 from .kernel import PHASES
@@ -132,7 +134,7 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         note = None
     except BoundUndefinedError as error:
         beside, note = {}, f"no bound: {error}"
-    lines = [f"  {'over ' + str(summary.num_rows) + ' trials':<22}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
+    lines = [f"  {'over ' + counted(summary.num_rows, 'trial'):<22}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
              "   bound"]
     for text, column, fmt, bound in _SUMMARY_ROWS:
         x = np.array(summary.column(column).to_pylist(), dtype=np.float64)  # to_numpy imports pandas
@@ -142,6 +144,10 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
             shown = ""
         lines.append(f"  {text:<22}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}   {shown}"
                      .rstrip())
+    work = np.array(summary.column("work").to_pylist(), dtype=np.float64)
+    if note is None and not p.mobile and work.max() > b.work:  # docs/replenishment-model.md section 9
+        note = (f"work above W_fix, a per-cycle bound that a trial of {p.ticks} ticks may exceed by part of "
+                f"a cycle; the strict ceiling within them is {fixed_work_ceiling(p):,.0f}")
     if note:
         lines.append(f"  {note}")
     return "\n".join(lines)
@@ -158,14 +164,18 @@ def format_bounds(config: Config) -> str:
         ("D_work", f"{fixed.d_work:.2f}", "ticks", "(c_w - 2 (v_min + v_move) D_c) / (v_min + v_work)"),
         ("D_cycle", f"{fixed.d_cycle:.2f}", "ticks", "D_work + 2 D_c + D_charge"),
         ("D", f"{fixed.duty:.5f}", "", "duty D_work / D_cycle"),
-        ("W_fix", f"{fixed.work:,.0f}", "points", "n_w D T"),
+        ("W_fix", f"{fixed.work:,.0f}", "points", "n_w D T (per cycle: a trial may exceed it by part of a cycle)"),
+        ("W_fix,T", f"{fixed_work_ceiling(config.params):,.0f}", "points",
+         "strict ceiling within T ticks (workers start full)"),
         ("E_fix", f"{fixed.efficiency:.4f}", "", "1 - D_cycle v_min / c_w - 2 D_c v_move / c_w"),
         "constant supply in the transfer area (the mobile strategy's reference)",
         ("D_charge,cs", f"{supply.d_charge:.2f}", "ticks", "c_w / ((1 - lambda) v_charge - v_min)"),
         ("D_work,cs", f"{supply.d_work:.2f}", "ticks", "c_w / (v_min + v_work)"),
         ("D_cs", f"{supply.duty:.5f}", "", "duty D_work,cs / (D_work,cs + D_charge,cs)"),
         ("W_cs", f"{supply.work:,.0f}", "points", "n_w T D_cs"),
-        ("E_cs", f"{supply.efficiency:.4f}", "", "counts the transfer loss, as Fig 12"),
+        ("E_cs", f"{supply.efficiency:.4f}", "",
+         "(c_w - v_min (D_work,cs + D_charge,cs)) / (c_w + lambda v_charge D_charge,cs): the loss"),
+        ("", "", "", "counted in the denominator, as Fig 12's efficiency counts it"),
     ]
     return "\n".join(f"  {row}" if isinstance(row, str) else
                      f"    {row[0]:<12}{row[1]:>10} {row[2]:<7} {row[3]}" for row in rows)

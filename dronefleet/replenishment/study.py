@@ -53,7 +53,7 @@ CHECK_CONFIGS = {
 CURVES = {
     "fig10": dict(x="work_ratio", xlabel="work ratio r (v_work = 0.1 r per tick; log scale)", log_x=True),
     "fig11": dict(x="charge_rate", xlabel="charge rate k (v_charge = k per tick)"),
-    "fig12": dict(x="transfer_loss", xlabel="transfer loss lambda (fraction of what the charger gives)",
+    "fig12": dict(x="transfer_loss", xlabel="transfer loss lambda (share of a transfer lost)",
                   efficiency="efficiency_with_loss", fixed_line=True),
 }
 def grid(study: StudyContext, figure: str) -> Any:

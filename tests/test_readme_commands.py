@@ -41,6 +41,11 @@ def test_shell_commands_are_found_in_order_and_joined():
     assert shell_commands(text) == ["a --x", "b    --y", "c"]
 
 
+def test_the_readme_is_short():
+    # A page to start from; the rest is the user guide (docs/guide/).
+    assert len((ROOT / "README.md").read_text(encoding="utf-8").splitlines()) < 250
+
+
 def test_the_quickstart_is_what_ci_runs():
     commands = shell_commands((ROOT / "README.md").read_text(encoding="utf-8"))
     assert commands[:2] == list(QUICKSTART)

@@ -7,8 +7,10 @@ results/ are written relative to the repository, so that they work when browsing
 root, they are pointed at the same pages.
 
 The docstrings name objects with Sphinx roles (``:func:`run```), which Markdown would show
-verbatim; :class:`SphinxRoles`, a griffe extension, makes them code spans (``run``) before
-mkdocstrings renders them.
+verbatim, and document constants and protocol members with comments (``#:`` above a constant, as
+Sphinx reads them; a trailing ``# ...`` after a declaration in a class body), which mkdocstrings
+would not show at all. :class:`SphinxRoles`, a griffe extension, makes the roles code spans
+(``run``) and the comments docstrings before mkdocstrings renders them.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import posixpath
 import re
 from pathlib import Path
 
-from griffe import Extension, Object
+from griffe import Docstring, Extension, Object
 from mkdocs.structure.files import File, Files
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,6 +29,8 @@ RESULTS = "results"
 LINK = re.compile(r"\]\((?![a-z][a-z0-9+.-]*:|#|/)([^)\s#]+)(#[^)\s]*)?\)")
 #: A Sphinx role: ``:func:`run```, ``:class:`~dronefleet.api.Run``` (``~``: show the last name only).
 ROLE = re.compile(r":(?:py:)?[a-z]+:`(~?)([^`]+)`")
+#: A declaration without a value in a class body and its trailing comment: ``NAME: str  # its name``.
+DECLARATION = re.compile(r"^\s*\w+\s*:[^=#]+#\s?(.+)$")
 
 
 def _results_files() -> list[str]:
@@ -66,7 +70,25 @@ class SphinxRoles(Extension):
     """Sphinx roles of the docstrings -> Markdown code spans (the module doc)."""
 
     def on_object(self, *, obj: Object, **kwargs) -> None:
+        if obj.is_attribute and obj.docstring is None and (comment := attribute_comment(obj)):
+            obj.docstring = Docstring(comment, lineno=obj.lineno, parent=obj)
         if obj.docstring is not None:
             obj.docstring.value = ROLE.sub(
                 lambda role: f"`{role.group(2).rsplit('.', 1)[-1] if role.group(1) else role.group(2)}`",
                 obj.docstring.value)
+
+
+def attribute_comment(attribute: Object) -> str | None:
+    """The ``#:`` lines right above ``attribute``, else its trailing comment in a class body; None if neither."""
+    if attribute.lineno is None or attribute.filepath is None:
+        return None
+    lines = attribute.lines_collection[attribute.filepath]
+    above = []
+    for line in reversed(lines[:attribute.lineno - 1]):
+        if not line.strip().startswith("#:"):
+            break
+        above.insert(0, line.strip().removeprefix("#:").removeprefix(" "))
+    if above:
+        return "\n".join(above)
+    declaration = DECLARATION.match(lines[attribute.lineno - 1])
+    return declaration.group(1).strip() if declaration and attribute.parent.is_class else None

@@ -57,3 +57,12 @@ def test_the_results_page_carries_its_figures(site):
 def test_model_pages_link_to_the_results_page_on_the_site(site):
     experiments = (site / "delivery-experiments" / "index.html").read_text(encoding="utf-8")
     assert 'href="../results/"' in experiments
+
+
+def test_comments_document_constants_and_protocol_members(site):
+    # ``#:`` above a constant and a trailing comment after a protocol member are their docstrings
+    contract = (site / "api" / "contract" / "index.html").read_text(encoding="utf-8")
+    optional = section(contract, "dronefleet.contract.OPTIONAL", "dronefleet.contract.Field")
+    assert "<code>format_bounds(config) -&gt; str</code>" in optional
+    name = section(contract, "dronefleet.contract.ScenarioContract.NAME", "dronefleet.contract.ScenarioContract.SCHEMA")
+    assert "its name in the registry" in name

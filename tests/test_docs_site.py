@@ -39,7 +39,7 @@ def test_the_sweep_page_documents_every_parameter_of_dronefleet_sweep(site):
     page = (site / "api" / "api" / "index.html").read_text(encoding="utf-8")
     sweep = section(page, "dronefleet.api.sweep", "dronefleet.api.Run")
     names = list(inspect.signature(api.sweep).parameters)
-    assert names == ["grid", "seeds", "base", "set", "jobs"]
+    assert {"grid", "seeds", "base", "set", "jobs"} <= set(names)  # the signature is the list under test
     documented = {name for name in names if re.search(rf"<code>\s*{name}\s*</code>", sweep)}
     assert documented == set(names)
     # the docstring's own words, and its Sphinx roles made code spans rather than shown verbatim

@@ -200,3 +200,15 @@ def test_each_drawing_is_a_column_or_page_wide_with_no_text_below_7_pt(name, tmp
     assert fig.get_size_inches()[0] in (figstyle.SINGLE_COLUMN, figstyle.DOUBLE_COLUMN)
     sizes = [text.get_fontsize() for text in fig.findobj(matplotlib.text.Text) if text.get_text().strip()]
     assert sizes and min(sizes) >= figstyle.MIN_FONT_SIZE
+
+
+def test_the_log_axis_of_delivery_times_reads_plain_minutes_on_a_narrow_range(tmp_path, drawn_figures):
+    # A user's small sweep: every median between 6 and 9 min, so the labelled ticks are minor
+    # ones, which read "6x10^0" in scientific notation
+    frame = outcomes().assign(median_delivery_time_s=lambda f: np.linspace(360.0, 540.0, len(f)))
+    kept = drawn_figures(figures)
+    figures.delivered_vs_delivery_time(frame, tmp_path / "fig")
+    axis = kept[0].axes[0].xaxis
+    labels = [label.get_text() for label in [*axis.get_ticklabels(), *axis.get_ticklabels(minor=True)]]
+    shown = [text for text in labels if text]
+    assert len(shown) >= 2 and all(float(text) > 0 for text in shown), shown

@@ -506,7 +506,7 @@ def threshold_gap(theta):
     return ((100.0 - theta) + half_ulp) * (1.0 + THRESHOLD_MARGIN)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _earliest_bid(book, fleet, counters, params, t):
     """A lower bound on when an idle UAV may first bid on a queued order, if nothing else happens.
 
@@ -559,7 +559,7 @@ def _earliest_bid(book, fleet, counters, params, t):
     return earliest
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     """The first tick before tick ``end_max`` (and within SCAN_TICKS) whose order some idle UAV may bid on.
 
@@ -600,7 +600,10 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     return end
 
 
-@njit(cache=True)
+# Inlined into advance, with _earliest_bid and _first_possible_tick: as calls, each one increfs and
+# decrefs every array it reads from the named tuples, at every event that leaves a tick pending
+# (reference counting was 28 % of the paper run, docs/guide/benchmarks.md); inlined, numba prunes the pairs.
+@njit(cache=True, inline="always")
 def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     """Jump over ticks before ``t_other`` at which provably nobody bids; True if any were skipped.
 

@@ -139,6 +139,29 @@ def test_tau_labels_of_coinciding_boxes_are_written_once_and_none_overlap(tmp_pa
         assert not a.get_window_extent(renderer).overlaps(b.get_window_extent(renderer))
 
 
+def test_a_figure_is_laid_out_once_for_all_its_formats_and_its_png_is_savefigs_own(tmp_path, monkeypatch):
+    # savefig lays a figure out again in a dry draw per format: half of the drawing time
+    layouts = []
+    from matplotlib.layout_engine import ConstrainedLayoutEngine as engine
+    execute = engine.execute
+    monkeypatch.setattr(engine, "execute", lambda self, fig: layouts.append(fig) or execute(self, fig))
+
+    def draw(ax):
+        ax.plot([0.0, 1.0, 2.0], [3.0, 1.0, 2.0], marker="o", label="a line")
+        ax.set_xlabel("x label")
+        ax.set_ylabel("y label")
+        ax.legend()
+
+    with figstyle._figure(tmp_path / "once", (3.5, 2.5)) as (mpl, _, ax):
+        draw(ax)
+    assert len(layouts) == 1
+    with mpl.style.context(["default", figstyle.RC]):  # as savefig lays it out for a PNG alone
+        fig = mpl.figure.Figure(figsize=(3.5, 2.5), layout="constrained")
+        draw(fig.subplots())
+        fig.savefig(tmp_path / "savefig.png", dpi=figstyle.DPI, metadata=figstyle._NO_STAMPS["png"])
+    assert (tmp_path / "once.png").read_bytes() == (tmp_path / "savefig.png").read_bytes()
+
+
 def test_the_users_matplotlib_style_changes_nothing(tmp_path):
     before = [path.read_bytes() for path in figures.aborted_by_tau(outcomes(), tmp_path / "before")]
     with matplotlib.rc_context({"lines.linewidth": 7.0, "axes.facecolor": "red", "font.size": 20,

@@ -35,7 +35,8 @@ from typing import TYPE_CHECKING, Any
 from . import scenarios
 from .config import ConfigError, _show, check_depth
 from .scenarios import Scenario
-from .sweeps import MAX_RUNS, Progress, available_cpus, collect, run_sweep, sweep_of_document
+from .sweeps import (MAX_RUNS, Progress, Sweep, _probe, available_cpus, check_layout, collect, run_sweep,
+                     sweep_of_document)
 
 if TYPE_CHECKING:
     import pandas
@@ -272,12 +273,13 @@ def _check_workers_can_import(document: dict) -> None:
 
 def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds: Iterable[int] | None = None,
           base: str | os.PathLike | None = None, set: Mapping[str, Any] | None = None,
-          jobs: int | None = None) -> pandas.DataFrame:
+          jobs: int | None = None, out: str | os.PathLike | None = None) -> pandas.DataFrame:
     """Run every configuration of ``grid`` times ``seeds``; return their summaries, one table.
 
     The sweep a sweep file with these ``[grid]``, ``[set]``, ``seeds`` and ``base`` would
     be (see :mod:`dronefleet.sweeps`), planned, run and collected in a temporary folder that
-    is removed afterwards: every run's config is validated before the first one starts.
+    is removed afterwards, or in the dataset folder ``out``, which is kept: every run's
+    config is validated before the first one starts.
 
     Parameters
     ----------
@@ -299,6 +301,14 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         Processes of this machine to run on (default: every CPU this process may use). The
         workers never run the calling script, which needs no ``__name__ == "__main__"``
         guard; a plugin defined in it (``rule="__main__:function"``) therefore needs ``jobs=1``.
+    out : path, optional
+        Keep the sweep's dataset in this folder, as ``dronefleet sweep run`` writes
+        ``<results>/<name>``: a parquet dataset per table, partitioned by the grid keys and
+        the seed key (read it with ``pandas.read_parquet(out / "orders")``), its
+        ``collected.parquet``, and ``dronefleet replay out --run KEY=VALUE ...`` plays any of
+        its runs. Runs already done there (same config) are kept, not run again; a folder of
+        another layout, a file, or one that cannot be written is refused before any run.
+        Default: a temporary folder, removed.
 
     Returns
     -------
@@ -343,12 +353,23 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         _check_workers_can_import(document)
     # kept in collected.parquet; only now, when every key and value is known to be one a config holds
     planned = dataclasses.replace(planned, text=json.dumps(document, default=str))
+    if out is not None:
+        if not isinstance(out, (str, os.PathLike)):
+            raise ConfigError(f"out={_show(out)}: expected the path of a folder for the sweep's dataset, or None")
+        out = Path(out)
+        check_layout(planned, out)  # a dataset of other keys, a damaged _layout.json: before anything is made
+        _probe([out], f"out={_show(os.fspath(out))} must be a folder where files can be written", keep=False)
+        return _run_and_collect(planned, out, workers)
     with tempfile.TemporaryDirectory(prefix="dronefleet-sweep-") as folder:
-        out = Path(folder) / planned.name
-        # a bar in a notebook; elsewhere as the caller's logging shows dronefleet's INFO lines
-        _, failures = run_sweep(planned, out, planned.runs, jobs or available_cpus(), progress=Progress())
-        if failures:
-            shown = "; ".join(f"{run.partition}: {error}" for run, error in list(failures.items())[:3])
-            raise RuntimeError(f"{len(failures)} of {len(planned.runs)} runs failed: {shown}")
-        table, _ = collect(planned, out)
+        return _run_and_collect(planned, Path(folder) / planned.name, workers)
+
+
+def _run_and_collect(planned: Sweep, out: Path, workers: int) -> pandas.DataFrame:
+    """Run the sweep ``planned`` into the dataset ``out`` on ``workers`` processes; its collected table."""
+    # a bar in a notebook; elsewhere as the caller's logging shows dronefleet's INFO lines
+    _, failures = run_sweep(planned, out, planned.runs, workers, progress=Progress())
+    if failures:
+        shown = "; ".join(f"{run.partition}: {error}" for run, error in list(failures.items())[:3])
+        raise RuntimeError(f"{len(failures)} of {len(planned.runs)} runs failed: {shown}")
+    table, _ = collect(planned, out)
     return table.to_pandas()

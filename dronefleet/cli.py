@@ -399,7 +399,7 @@ def _path(text: str) -> str:
 def _add_sweep_commands(commands):
     """``dronefleet sweep plan|run|status|collect SWEEP``; the handlers are in :mod:`dronefleet.sweeps`."""
     parser = commands.add_parser("sweep", help="parameter sweeps: plan a job array, run, status, collect",
-                                 description="Grids of conditions times seeds; see the README, section Sweeps.")
+                                 description="Grids of conditions times seeds; see docs/guide/sweeps.md.")
     actions = parser.add_subparsers(dest="action", required=True)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("sweep", help="sweep file (TOML), or a shipped sweep file's name (dronefleet configs "

@@ -90,15 +90,15 @@ REQUIRED = ("NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEED
             "replace", "value", "read_config", "table_schemas", "simulate", "format_summary", "describe", "label")
 #: The optional hooks, each with its parameters (what it gets and returns: docs/scenario-contract.md):
 #:
-#: ``format_bounds(config) -> str``: analytic bounds for ``dronefleet bounds``; ConfigError where none exists.
-#: ``replicates(config) -> range``: the trials a run holds, if several; a sweep refuses seeds repeating one.
-#: ``replay_data(run_dir[, trial]) -> dict``: the replay page's data of a run folder (JSON-ready, ``title``
-#: and ``duration_s`` [s] at least), drawn by the ``replay.js`` beside the scenario's module; a scenario
-#: with ``replicates`` takes ``trial`` too (``replay --trial K``; None: the run's first).
-#: ``check_replayable(config)``: ConfigError (one line) if the page of a run of ``config`` would be
-#: refused; ``run --replay`` calls it before the run.
-#: ``outdated(config, summary) -> bool``: True if a done run must run again (an input besides its config changed).
-#: ``study() -> FigureStudy``: its figures' tables, drawings and check for ``dronefleet reproduce``.
+#: - ``format_bounds(config) -> str``: analytic bounds for ``dronefleet bounds``; ConfigError where none exists.
+#: - ``replicates(config) -> range``: the trials a run holds, if several; a sweep refuses seeds repeating one.
+#: - ``replay_data(run_dir[, trial]) -> dict``: the replay page's data of a run folder (JSON-ready, ``title``
+#:   and ``duration_s`` [s] at least), drawn by the ``replay.js`` beside the scenario's module; a scenario
+#:   with ``replicates`` takes ``trial`` too (``replay --trial K``; None: the run's first).
+#: - ``check_replayable(config)``: ConfigError (one line) if the page of a run of ``config`` would be
+#:   refused; ``run --replay`` calls it before the run.
+#: - ``outdated(config, summary) -> bool``: True if a done run must run again (an input besides its config changed).
+#: - ``study() -> FigureStudy``: its figures' tables, drawings and check for ``dronefleet reproduce``.
 OPTIONAL = {"format_bounds": ("config",), "replicates": ("config",), "replay_data": ("run_dir",),
             "check_replayable": ("config",), "outdated": ("config", "summary"), "study": ()}
 _PARAMETERS = {"load": ("path", "overrides", "seed"), "resolve_key": ("key",), "replace": ("config", "changes"),

@@ -154,6 +154,35 @@ def test_a_replenishment_sweep_has_a_row_per_trial_of_each_run():
     pd.testing.assert_frame_equal(table[single.columns].iloc[2:].reset_index(drop=True), single)
 
 
+def test_a_sweep_keeps_its_dataset_in_out_and_reuses_its_done_runs(tmp_path):
+    out = tmp_path / "mine"
+    grid = {"rule": ["least_confident", "random"]}
+    table = dronefleet.sweep(grid, seeds=[0], set=TINY["delivery"], jobs=1, out=out)
+    pd.testing.assert_frame_equal(table, pd.read_parquet(out / "collected.parquet"))
+    for name in scenarios.get("delivery").tables:  # a table each, partitioned as the CLI's sweeps
+        assert (out / name / "rule=random" / "seed=0" / "part-0.parquet").is_file()
+    orders = pd.read_parquet(out / "orders")
+    assert set(orders["rule"]) == {"least_confident", "random"}
+    done = {path: path.stat().st_mtime_ns for path in out.rglob("part-0.parquet")}
+    again = dronefleet.sweep(grid, seeds=[0], set=TINY["delivery"], jobs=1, out=out)
+    pd.testing.assert_frame_equal(again, table)
+    assert {path: path.stat().st_mtime_ns for path in out.rglob("part-0.parquet")} == done  # not run again
+
+
+@pytest.mark.parametrize("other", ["file", "layout"])
+def test_a_sweep_refuses_an_out_that_cannot_take_its_dataset_before_any_run(other, tmp_path):
+    out = tmp_path / "mine"
+    if other == "file":
+        out.write_text("mine")
+    else:  # a dataset of other keys
+        dronefleet.sweep({"tau_minutes": [15]}, seeds=[0], set=TINY["delivery"], jobs=1, out=out)
+    before = sorted(tmp_path.rglob("*"))
+    with pytest.raises(ConfigError) as refused:
+        dronefleet.sweep({"rule": ["random"]}, seeds=[0], set=TINY["delivery"], jobs=1, out=out)
+    assert str(out) in str(refused.value) and "\n" not in str(refused.value)
+    assert sorted(tmp_path.rglob("*")) == before
+
+
 @pytest.mark.parametrize("call, message", [
     (lambda: dronefleet.run(tau_minute=20), r"unknown key 'tau_minute' \(did you mean 'tau_minutes'\?\)"),
     (lambda: dronefleet.run(3), r"config=3: expected None, a scenario name \('delivery', 'replenishment', 'items'\)"),
@@ -176,6 +205,7 @@ def test_a_replenishment_sweep_has_a_row_per_trial_of_each_run():
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], set={"rule": "random"}), r"rule is both fixed"),
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], base="replenishment"), r"unknown key 'rule'"),
     (lambda: dronefleet.sweep({"n_uavs": [0]}, seeds=[0]), r"\[grid\] at n_uavs = 0: .*n_uavs"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], out=3), r"out=3: expected the path of a folder"),
     # sizes the CLI's cap refuses are refused here too, and before a list of them is built
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=range(10**12)),
      r"seeds=range\(0, 1000000000000\): more than 100,000 seeds; a sweep may hold at most 100,000 runs"),

@@ -1,11 +1,12 @@
-"""Citations of the model descriptions ("docs/delivery-model.md section 7") point at sections that exist."""
+"""Citations of the model descriptions ("docs/delivery-model.md section 7") point at sections that exist,
+and the links of the README and the docs at files that exist."""
 
 import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 CITATION = re.compile(r"docs/([\w-]+\.md)(?: sections? (\d+(?:\.\d+)?(?:(?:, | and |-)\d+(?:\.\d+)?)*))?")
-CITING = ("README.md", "CONTRIBUTING.md", "dronefleet/**/*.py", "dronefleet/**/*.toml", "configs/**/*.toml",
+CITING = ("README.md", "docs/guide/*.md", "CONTRIBUTING.md", "dronefleet/**/*.py", "dronefleet/**/*.toml", "configs/**/*.toml",
           "tests/**/*.py", "tests/**/*.md", "experiments/*", "results/README.md")
 
 
@@ -58,3 +59,46 @@ def test_every_citation_names_a_section_that_exists():
         if missing:
             wrong.append(f"{cited_from}: docs/{doc} has no section {', '.join(sorted(missing))}")
     assert not wrong, "\n".join(wrong)
+
+
+#: A Markdown link's target: ``[text](target)``, the target without its ``#anchor``.
+LINK = re.compile(r"\[[^\]]*\]\(([^)#\s]*)(?:#[^)\s]*)?\)")
+
+
+def links(path):
+    """The relative link targets of the Markdown file ``path`` (web addresses and anchors left out)."""
+    text = re.sub(r"^```.*?^```", "", path.read_text(encoding="utf-8"), flags=re.MULTILINE | re.DOTALL)
+    return [target for target in LINK.findall(text) if target and not re.match(r"[a-z]+:", target)]
+
+
+def test_links_finds_relative_targets_only():
+    text = "[a](b.md#c) [d](https://e) [f](#g) `[h](i.md)`\n```\n[j](k.md)\n```\n[l](../m.md)"
+    path = ROOT / "tests" / ".links-example.md"
+    try:
+        path.write_text(text, encoding="utf-8")
+        assert links(path) == ["b.md", "i.md", "../m.md"]
+    finally:
+        path.unlink()
+
+
+def test_every_link_of_the_readme_and_docs_resolves():
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+
+    def resolves(page, target):
+        # the site's hook (docs/hooks.py) publishes results/ beside docs/: docs/index.md links it as results/
+        at = (page.parent / target).resolve()
+        site_results = (ROOT / "docs" / "results").resolve()
+        return at.exists() or (at.is_relative_to(site_results)
+                               and (ROOT / "results" / at.relative_to(site_results)).exists())
+
+    broken = [f"{page.relative_to(ROOT)}: {target}" for page in pages for target in links(page)
+              if not resolves(page, target)]
+    assert not broken, "\n".join(broken)
+
+
+def test_the_user_guide_links_only_inside_docs():
+    # The documentation site is built from docs/ alone: a link out of it is a broken page there.
+    docs = (ROOT / "docs").resolve()
+    outside = [f"{page.relative_to(ROOT)}: {target}" for page in sorted((ROOT / "docs" / "guide").glob("*.md"))
+               for target in links(page) if docs not in (page.parent / target).resolve().parents]
+    assert not outside, "\n".join(outside)

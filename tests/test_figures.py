@@ -173,7 +173,8 @@ def test_the_users_matplotlib_style_changes_nothing(tmp_path):
 
 def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp_path):
     # Imports only the standard library, numpy, pandas, (lazily) matplotlib and the shared style,
-    # which imports nothing of dronefleet either: drawing cannot load the engine.
+    # which imports of dronefleet only its output errors (outputs, config: no engine): drawing cannot
+    # load the engine.
     def imported(module):
         tree = ast.parse(Path(module.__file__).read_text())
         names = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
@@ -185,7 +186,7 @@ def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp
         return {name for name in imported(module) if name not in sys.stdlib_module_names}
 
     assert outside_stdlib(figures) == {"numpy", "pandas", "..figstyle"}
-    assert outside_stdlib(figstyle) == {"matplotlib"}
+    assert outside_stdlib(figstyle) == {"matplotlib", ".outputs"}
     figures.accuracy_over_weeks(accuracy(), tmp_path / "fig")
     # matplotlib itself may import pyplot (to resolve its default backend), but no figure is left there.
     if "matplotlib.pyplot" in sys.modules:
@@ -197,6 +198,18 @@ def test_without_matplotlib_the_error_says_how_to_install_it(tmp_path, monkeypat
     with pytest.raises(ImportError, match=r"a dependency of dronefleet: pip install matplotlib"):
         figures.aborted_by_tau(outcomes(), tmp_path / "fig")
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("folder", ["missing", "a-file"])
+def test_a_figure_into_a_folder_that_is_not_there_is_one_line_before_drawing(folder, tmp_path):
+    from dronefleet.config import ConfigError
+
+    (tmp_path / "a-file").write_text("")
+    with pytest.raises(ConfigError) as refused:
+        figures.aborted_by_tau(outcomes(), tmp_path / folder / "fig")
+    message = str(refused.value)
+    assert "\n" not in message and str(tmp_path / folder) in message
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file"]
 
 
 def test_threshold_table_files(tmp_path):
@@ -223,3 +236,15 @@ def test_each_drawing_is_a_column_or_page_wide_with_no_text_below_7_pt(name, tmp
     assert fig.get_size_inches()[0] in (figstyle.SINGLE_COLUMN, figstyle.DOUBLE_COLUMN)
     sizes = [text.get_fontsize() for text in fig.findobj(matplotlib.text.Text) if text.get_text().strip()]
     assert sizes and min(sizes) >= figstyle.MIN_FONT_SIZE
+
+
+def test_the_log_axis_of_delivery_times_reads_plain_minutes_on_a_narrow_range(tmp_path, drawn_figures):
+    # A user's small sweep: every median between 6 and 9 min, so the labelled ticks are minor
+    # ones, which read "6x10^0" in scientific notation
+    frame = outcomes().assign(median_delivery_time_s=lambda f: np.linspace(360.0, 540.0, len(f)))
+    kept = drawn_figures(figures)
+    figures.delivered_vs_delivery_time(frame, tmp_path / "fig")
+    axis = kept[0].axes[0].xaxis
+    labels = [label.get_text() for label in [*axis.get_ticklabels(), *axis.get_ticklabels(minor=True)]]
+    shown = [text for text in labels if text]
+    assert len(shown) >= 2 and all(float(text) > 0 for text in shown), shown

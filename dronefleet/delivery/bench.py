@@ -76,7 +76,8 @@ def _span(values, digits=3):
 
 
 def bench_paper(runs):
-    """The paper run (25 UAVs, 8 weeks, tau 15 min, least_confident) for seeds 0..runs-1."""
+    """The paper run (25 UAVs, 8 weeks, tau 15 min, least_confident) for seeds 0..runs-1; prints
+    and returns the engine's seconds per run (``engine_s``: one per seed)."""
     from .config import default_config, replace
 
     config = default_config()
@@ -89,10 +90,12 @@ def bench_paper(runs):
     counts = phases[0][3]
     print(f"  seed 0: {counts['orders']} orders, {counts['attempts']} attempts, "
           f"{counts['auctions']} advertisements (ticks advertised, evaluated or skipped)")
+    return {"engine_s": [sum(p[:3]) for p in phases]}
 
 
 def bench_scaling(weeks):
-    """Loop time against fleet size at constant load per UAV; prints the table and the fitted exponent."""
+    """Loop time against fleet size at constant load per UAV; prints the table and the fitted exponent,
+    returns ``{"loop_s_per_8_weeks": {UAVs: s}, "exponent": fitted over the goal's range 25-1600}``."""
     from .config import default_config, replace
 
     base = default_config()
@@ -111,6 +114,9 @@ def bench_scaling(weeks):
         mx, my = statistics.fmean(x), statistics.fmean(y)
         slope = sum((a - mx) * (b - my) for a, b in zip(x, y)) / sum((a - mx) ** 2 for a in x)
         print(f"  fitted exponent of loop time per 8 weeks against UAVs ({sizes[0]}-{sizes[m - 1]}): {slope:.2f}")
+        if m == len(SCALING_WEEKS):
+            exponent = slope
+    return {"loop_s_per_8_weeks": dict(zip(sizes, per8)), "exponent": exponent}
 
 
 def _median_process_s(command, repeats=5):
@@ -124,16 +130,20 @@ def _median_process_s(command, repeats=5):
 
 
 def bench_process():
-    """Whole-process times with warm caches: a paper ``dronefleet run``, bare imports, ``--help``."""
+    """Whole-process times with warm caches: a paper ``dronefleet run``, bare imports, ``--help``;
+    prints them and returns the seconds of each of the 5 processes per command."""
     python = sys.executable
     _median_process_s([python, "-m", "dronefleet.cli", "--help"], 1)  # warm the caches
     with tempfile.TemporaryDirectory(prefix="dronefleet-bench-") as out:
         run = [python, "-m", "dronefleet.cli", "run", "--out", str(Path(out) / "run"), "--overwrite"]
         _median_process_s(run, 1)
-        print("whole processes, warm caches (median [min-max] of 5):")
-        print(f"  dronefleet run (paper config): {_span(_median_process_s(run), 2)} s")
-    print(f"  python -c 'import numpy, numba': {_span(_median_process_s([python, '-c', 'import numpy, numba']), 2)} s")
-    print(f"  dronefleet --help: {_span(_median_process_s([python, '-m', 'dronefleet.cli', '--help']), 2)} s")
+        walls = {"dronefleet run (paper config)": _median_process_s(run)}
+    walls["python -c 'import numpy, numba'"] = _median_process_s([python, "-c", "import numpy, numba"])
+    walls["dronefleet --help"] = _median_process_s([python, "-m", "dronefleet.cli", "--help"])
+    print("whole processes, warm caches (median [min-max] of 5):")
+    for command, seconds in walls.items():
+        print(f"  {command}: {_span(seconds, 2)} s")
+    return walls
 
 
 def main(argv=None):
@@ -147,7 +157,7 @@ def main(argv=None):
     if args.warm:
         return _bench(args, float("nan"))
     with fresh_cache() as compile_s:
-        _bench(args, compile_s)
+        return _bench(args, compile_s)
 
 
 @contextlib.contextmanager
@@ -163,18 +173,21 @@ def fresh_cache() -> Iterator[float]:
 
 
 def _bench(args, compile_s):
+    """Print the figures that ``args`` ask for; return them (``compile_s``, ``load_s``, ``peak_mb``
+    and what :func:`bench_paper`, :func:`bench_scaling` and :func:`bench_process` return)."""
     start = time.perf_counter()
     compile_engine()
     load_s = time.perf_counter() - start
     print(f"Python {sys.version.split()[0]}; compile time (fresh process, empty cache): {compile_s:.1f} s; "
           f"loading the compiled engine: {load_s:.2f} s")
-    bench_paper(args.runs)
+    figures = {"compile_s": compile_s, "load_s": load_s, **bench_paper(args.runs)}
     if args.scaling or args.big:
-        bench_scaling({**SCALING_WEEKS, **(BIG_WEEKS if args.big else {})})
-    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
-    print(f"peak memory (max RSS of the process doing the runs): {peak_mb:.0f} MB")
+        figures.update(bench_scaling({**SCALING_WEEKS, **(BIG_WEEKS if args.big else {})}))
+    figures["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+    print(f"peak memory (max RSS of the process doing the runs): {figures['peak_mb']:.0f} MB")
     if args.process:
-        bench_process()
+        figures["process_s"] = bench_process()
+    return figures
 
 
 if __name__ == "__main__":

@@ -86,6 +86,9 @@ def _delivered_panel(mpl, ax, outcomes, rule_styles):
     ax.set_xscale("log")  # medians span minutes (light load) to days (overload)
     ax.autoscale_view()
     ax.xaxis.set_major_formatter(mpl.ticker.FormatStrFormatter("%g"))
+    # on a narrow range (a small sweep) only minor ticks get labels: plain minutes there too, the
+    # same ticks labelled as by the default formatter, which would write "6x10^0"
+    ax.xaxis.set_minor_formatter(mpl.ticker.LogFormatter(labelOnlyBase=False))
     ax.set_xlabel("delivery time, per-run median (min, log scale)")
     ax.set_ylabel("delivered parcels per run")
     return boxes

@@ -103,22 +103,30 @@ def work_and_efficiency(runs: pandas.DataFrame, bounds: pandas.DataFrame, path: 
     Parameters
     ----------
     runs : pandas.DataFrame
-        Per-trial rows: ``strategy``, ``x``, ``work`` and ``efficiency``.
+        Per-trial rows: ``strategy``, ``x``, ``work`` (points) and ``efficiency`` (work energy /
+        total energy, 0..1), e.g. a run's ``summary`` with the columns of
+        :func:`dronefleet.replenishment.experiments.config_row` of its config.
     bounds : pandas.DataFrame
-        One row per configuration: ``strategy``, ``x``, ``bound_work``, ``bound_efficiency``.
+        One row per configuration: ``strategy``, ``x``, ``bound_work`` (points),
+        ``bound_efficiency`` (0..1), as :func:`dronefleet.replenishment.experiments.bounds_table`
+        gives them (NaN where a bound does not exist: no line there).
     path : str or Path
         Figure file name (its suffix is replaced by each format's).
     x : str
-        The varied parameter's column.
+        The varied parameter's column (e.g. ``work_ratio``, ``charge_rate``, ``transfer_loss``).
     xlabel : str
+        The x axis label, with the parameter's unit if it has one.
     efficiency : str
         The efficiency column (Fig 12: ``efficiency_with_loss``).
     log_x : bool
+        A logarithmic x axis (Fig 10's work ratios span 0.1 to 10).
     fixed_line : bool
+        Draw the fixed strategy as horizontal lines across the axis (it does not vary with ``x``).
 
     Returns
     -------
     list of Path
+        The figure's files, one per format.
     """
     panels = (("work", "bound_work", "work W (points)"),
               (efficiency, "bound_efficiency", "efficiency" if efficiency == "efficiency"

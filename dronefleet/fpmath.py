@@ -11,8 +11,8 @@ conversions of small integers). fdlibm's high-word bit tests are replaced by the
 tests on ``frexp``'s mantissa. numba compiles them without ``fastmath``, so LLVM neither
 reorders nor contracts ``a * b + c`` into an FMA (numba's default).
 
-Every function takes and returns one float64 and is a module-level ``@njit(cache=True)``
-kernel; on arrays, call it in a compiled loop.
+Every function takes and returns one float64 (``sincos``: both of ``(sin(x), cos(x))``, bit
+for bit) and is a module-level ``@njit(cache=True)`` kernel; on arrays, call it in a compiled loop.
 
 Accuracy, measured against Python's ``math`` (glibc, close to correctly rounded) by
 ``tests/test_fpmath.py`` over the ranges the model uses and wide random ranges:
@@ -275,6 +275,28 @@ def cos(x):
         return -_kernel_cos(y0, y1)
     return _kernel_sin(y0, y1)
 
+
+@njit(cache=True)
+def sincos(x):
+    """``(sin(x), cos(x))``, bit for bit the two calls', with one argument reduction.
+
+    For the per-move heading update, where the reduction is half the cost of each call.
+    """
+    if abs(x) < _PI_4_HW:
+        return _kernel_sin(x, 0.0), _kernel_cos(x, 0.0)
+    if not abs(x) <= TRIG_DOMAIN:
+        return np.nan, np.nan
+    n, y0, y1 = _reduce(x)
+    ks = _kernel_sin(y0, y1)
+    kc = _kernel_cos(y0, y1)
+    q = n & 3
+    if q == 0:
+        return ks, kc
+    if q == 1:
+        return kc, -ks
+    if q == 2:
+        return -ks, -kc
+    return -kc, ks
 
 # --- atan2 (s_atan.c, e_atan2.c) -----------------------------------------------------------
 _ATAN_HI = (4.63647609000806093515e-01, 7.85398163397448278999e-01,

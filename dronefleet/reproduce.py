@@ -303,7 +303,7 @@ def _read_parquet(path, figure, name):
         if table.num_rows == 0:  # every figure draws at least one run, and --check compares one
             raise DataError(f"table {str(path)!r} holds no rows")
         frame = pd.DataFrame({column: checked_column(table, column, path, ok, allowed, nullable=nullable)
-                              for column, (_, ok, allowed, nullable) in kinds.items()})
+                              for column, (_, ok, allowed, nullable) in kinds.items()})[schema.names]
         keys = list(UNIQUE_KEYS.get(name, ()))
         repeated = frame.duplicated(keys) if keys else None
         if repeated is not None and repeated.any():

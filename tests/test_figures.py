@@ -139,6 +139,29 @@ def test_tau_labels_of_coinciding_boxes_are_written_once_and_none_overlap(tmp_pa
         assert not a.get_window_extent(renderer).overlaps(b.get_window_extent(renderer))
 
 
+def test_a_figure_is_laid_out_once_for_all_its_formats_and_its_png_is_savefigs_own(tmp_path, monkeypatch):
+    # savefig lays a figure out again in a dry draw per format: half of the drawing time
+    layouts = []
+    from matplotlib.layout_engine import ConstrainedLayoutEngine as engine
+    execute = engine.execute
+    monkeypatch.setattr(engine, "execute", lambda self, fig: layouts.append(fig) or execute(self, fig))
+
+    def draw(ax):
+        ax.plot([0.0, 1.0, 2.0], [3.0, 1.0, 2.0], marker="o", label="a line")
+        ax.set_xlabel("x label")
+        ax.set_ylabel("y label")
+        ax.legend()
+
+    with figstyle._figure(tmp_path / "once", (3.5, 2.5)) as (mpl, _, ax):
+        draw(ax)
+    assert len(layouts) == 1
+    with mpl.style.context(["default", figstyle.RC]):  # as savefig lays it out for a PNG alone
+        fig = mpl.figure.Figure(figsize=(3.5, 2.5), layout="constrained")
+        draw(fig.subplots())
+        fig.savefig(tmp_path / "savefig.png", dpi=figstyle.DPI, metadata=figstyle._NO_STAMPS["png"])
+    assert (tmp_path / "once.png").read_bytes() == (tmp_path / "savefig.png").read_bytes()
+
+
 def test_the_users_matplotlib_style_changes_nothing(tmp_path):
     before = [path.read_bytes() for path in figures.aborted_by_tau(outcomes(), tmp_path / "before")]
     with matplotlib.rc_context({"lines.linewidth": 7.0, "axes.facecolor": "red", "font.size": 20,
@@ -150,7 +173,8 @@ def test_the_users_matplotlib_style_changes_nothing(tmp_path):
 
 def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp_path):
     # Imports only the standard library, numpy, pandas, (lazily) matplotlib and the shared style,
-    # which imports nothing of dronefleet either: drawing cannot load the engine.
+    # which imports of dronefleet only its output errors (outputs, config: no engine): drawing cannot
+    # load the engine.
     def imported(module):
         tree = ast.parse(Path(module.__file__).read_text())
         names = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import)
@@ -162,7 +186,7 @@ def test_figures_import_nothing_of_the_simulator_and_leave_no_pyplot_figures(tmp
         return {name for name in imported(module) if name not in sys.stdlib_module_names}
 
     assert outside_stdlib(figures) == {"numpy", "pandas", "..figstyle"}
-    assert outside_stdlib(figstyle) == {"matplotlib"}
+    assert outside_stdlib(figstyle) == {"matplotlib", ".outputs"}
     figures.accuracy_over_weeks(accuracy(), tmp_path / "fig")
     # matplotlib itself may import pyplot (to resolve its default backend), but no figure is left there.
     if "matplotlib.pyplot" in sys.modules:
@@ -174,6 +198,18 @@ def test_without_matplotlib_the_error_says_how_to_install_it(tmp_path, monkeypat
     with pytest.raises(ImportError, match=r"a dependency of dronefleet: pip install matplotlib"):
         figures.aborted_by_tau(outcomes(), tmp_path / "fig")
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("folder", ["missing", "a-file"])
+def test_a_figure_into_a_folder_that_is_not_there_is_one_line_before_drawing(folder, tmp_path):
+    from dronefleet.config import ConfigError
+
+    (tmp_path / "a-file").write_text("")
+    with pytest.raises(ConfigError) as refused:
+        figures.aborted_by_tau(outcomes(), tmp_path / folder / "fig")
+    message = str(refused.value)
+    assert "\n" not in message and str(tmp_path / folder) in message
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file"]
 
 
 def test_threshold_table_files(tmp_path):

@@ -112,6 +112,26 @@ def test_sin_cos_exact_values_and_domain():
         assert math.isnan(fpmath.sin(x)) and math.isnan(fpmath.cos(x))
 
 
+@njit
+def _sincos_all(x):
+    s = np.empty_like(x)
+    c = np.empty_like(x)
+    for j in range(x.shape[0]):
+        s[j], c[j] = fpmath.sincos(x[j])
+    return s, c
+
+
+def test_sincos_is_sin_and_cos_bit_for_bit():
+    # the kernels call sincos on the trajectory path in place of sin and cos: any
+    # last-bit difference would move the golden fingerprints
+    x = np.concatenate([RNG.uniform(-2.0 * math.pi, 2.0 * math.pi, 20000), RNG.uniform(-1e5, 1e5, 2000),
+                        np.arange(-200, 201) * (math.pi / 4.0) + RNG.uniform(-1e-9, 1e-9, 401),
+                        [0.0, -0.0, 1e-300, -1e-300, math.pi, -math.pi, np.inf, -np.inf, np.nan,
+                         fpmath.TRIG_DOMAIN, -fpmath.TRIG_DOMAIN, 2.0 * fpmath.TRIG_DOMAIN]])
+    s, c = _sincos_all(x)
+    np.testing.assert_array_equal(s.view(np.int64), _apply(fpmath.sin, x).view(np.int64))
+    np.testing.assert_array_equal(c.view(np.int64), _apply(fpmath.cos, x).view(np.int64))
+
 def test_atan2_within_one_ulp():
     n = 20000
     y = RNG.standard_normal(n) * np.exp(RNG.uniform(-20.0, 20.0, n))

@@ -27,7 +27,7 @@ the controllable events' actions (5.3).
 import numpy as np
 from numba import njit
 
-from ..fpmath import atan2, cos, sin
+from ..fpmath import atan2, cos, sin, sincos
 from ..rng import normal_pair, uniform
 
 # Event codes: the columns of the kernel's transition tables (names without EV_).
@@ -489,8 +489,7 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
     for tr in range(n_trials):
         place_robots(rng, tr, x, y, th)
         for i in range(n):
-            ct[tr, i] = cos(th[tr, i])
-            st[tr, i] = sin(th[tr, i])
+            st[tr, i], ct[tr, i] = sincos(th[tr, i])
             energy[tr, i] = cap[i]
             role = ROLE_WORKER if i < nw else ROLE_CHARGER
             for k in range(kmax):
@@ -524,8 +523,8 @@ def run_trials(rates, n_workers, n_chargers, ticks, sample_every, mobile, wheel_
                     x[tr, i] = min(max(x[tr, i] + v * ct[tr, i] * DT, -SAFE), SAFE)
                     y[tr, i] = min(max(y[tr, i] + v * st[tr, i] * DT, -SAFE), SAFE)
                     th[tr, i] = _wrap(th[tr, i] + omega * DT)
-                    ct[tr, i] = cos(th[tr, i])
-                    st[tr, i] = sin(th[tr, i])
+                    # one argument reduction for both (fpmath.sincos: the same bits)
+                    st[tr, i], ct[tr, i] = sincos(th[tr, i])
             # pair geometry, shared by neighbours, rays and transfers. Only pairs
             # with a robot that moved change; the others keep last tick's values.
             # A robot's obstacle vector depends on its own pose and the robots within

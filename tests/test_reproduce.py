@@ -315,7 +315,7 @@ def test_a_write_that_fails_is_one_line_and_leaves_no_part_of_its_file(tmp_path,
                         full)
     assert cli.main(["reproduce", "fig09", "--quick", "--jobs", "1", "--out", str(tmp_path)]) == 2
     folder = tmp_path / "quick" / "fig09"
-    named = folder / "runs.parquet" if failing == "table" else folder  # a figure is several files
+    named = folder / ("runs.parquet" if failing == "table" else "fig09.png")  # a figure's first file
     assert capsys.readouterr().err == f"dronefleet: error: cannot write {str(named)!r}: No space left on device\n"
     left = sorted(p.name for p in folder.iterdir())
     assert left == ([] if failing == "table" else ["bounds.parquet", "runs.parquet"])  # no hidden temporary

@@ -60,6 +60,7 @@ forecast is :func:`reservation_wait`; the engine runs the two phases.
 import functools
 import importlib
 import logging
+import re
 from importlib.metadata import entry_points
 from typing import NamedTuple
 
@@ -268,6 +269,10 @@ def _import_path(path: str):
                         f"({type(e).__name__}: {brief(e)})") from None
 
 
+#: A terminal's colour/style escape sequence (ANSI SGR), as numba writes them around its messages.
+_TERMINAL_COLOUR = re.compile(r"\x1b\[[0-9;]*m")
+
+
 def _checked(kernel) -> Rule:
     """The plugin rule of ``kernel`` if it is a numba-compiled function of the contract (compiled for it here)."""
     if not isinstance(kernel, Dispatcher):
@@ -284,7 +289,9 @@ def _checked(kernel) -> Rule:
         # With the return type given, numba converts what the rule returns (a literal True, an int score).
         kernel.compile(RULE_SIGNATURE)
     except (NumbaError, TypeError) as e:  # TypeError: another number of arguments
-        lines = [line.strip() for line in str(e).splitlines() if line.strip()] or [type(e).__name__]
+        # numba colours its messages when colorama is installed: the escape codes are no text of ours
+        plain = _TERMINAL_COLOUR.sub("", str(e))
+        lines = [line.strip() for line in plain.splitlines() if line.strip()] or [type(e).__name__]
         # numba's first line names its failed pass; the cause and the plugin's line come after it
         cause = next((line for line in lines if not line.startswith("Failed in ")), lines[0])
         where = next((f" ({line.rstrip(':')})" for line in lines if line.startswith("File ")), "")

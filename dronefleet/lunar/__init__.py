@@ -1,0 +1,1 @@
+"""Lunar foraging-with-recharging scenario (issue 22)."""

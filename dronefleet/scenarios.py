@@ -15,8 +15,8 @@ Registered are:
 
 * the built-ins, in :data:`SCENARIOS` (the one place they are listed), each imported only
   when first used, so ``dronefleet --help`` stays cheap: ``delivery``
-  (:mod:`dronefleet.delivery.scenario`), ``replenishment`` (:mod:`dronefleet.replenishment.scenario`)
-  and ``items`` (:mod:`dronefleet.items.scenario`);
+  (:mod:`dronefleet.delivery.scenario`), ``replenishment`` (:mod:`dronefleet.replenishment.scenario`),
+  ``items`` (:mod:`dronefleet.items.scenario`) and ``lunar`` (:mod:`dronefleet.lunar.scenario`);
 * scenarios installed from other packages as entry points of the group ``dronefleet.scenarios``
   (:data:`dronefleet.contract.ENTRY_POINT_GROUP`), ``name = "package.module"`` or
   ``"package.module:object"``. One is loaded when a config, sweep or call names it (or
@@ -195,12 +195,18 @@ def _items() -> Any:
     return scenario
 
 
+def _lunar() -> Any:
+    from .lunar import scenario
+
+    return scenario
+
 
 #: The built-in scenarios, the one place they are registered.
 SCENARIOS: dict[str, Scenario] = {
     "delivery": Scenario("delivery", _delivery),
     "replenishment": Scenario("replenishment", _replenishment),
     "items": Scenario("items", _items),
+    "lunar": Scenario("lunar", _lunar),
 }
 
 

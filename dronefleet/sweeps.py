@@ -1024,7 +1024,8 @@ def _partition_schema(sweep: Sweep):
     """The partition keys of ``sweep`` as a pyarrow schema, each with its config type."""
     import pyarrow as pa
 
-    types = {float: pa.float64(), int: pa.int64(), str: pa.string()}
+    # bool: a switch such as lunar's los_bodies is a grid key like any other (partition "los_bodies=True")
+    types = {float: pa.float64(), int: pa.int64(), str: pa.string(), bool: pa.bool_()}
     return pa.schema([(key, types[type(sweep.scenario.defaults[key])]) for key in sweep.runs[0].keys])
 
 

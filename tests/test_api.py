@@ -185,7 +185,7 @@ def test_a_sweep_refuses_an_out_that_cannot_take_its_dataset_before_any_run(othe
 
 @pytest.mark.parametrize("call, message", [
     (lambda: dronefleet.run(tau_minute=20), r"unknown key 'tau_minute' \(did you mean 'tau_minutes'\?\)"),
-    (lambda: dronefleet.run(3), r"config=3: expected None, a scenario name \('delivery', 'replenishment', 'items'\)"),
+    (lambda: dronefleet.run(3), r"config=3: expected None, a scenario name \('delivery', 'replenishment', 'items', 'lunar'\)"),
     (lambda: dronefleet.run("no-such-config.toml"), r"cannot read config file 'no-such-config.toml'"),
     (lambda: dronefleet.run(tau_minutes=-1), r"orders.tau_minutes = -1 is out of range: allowed \(0, 1.008e\+07\]"),
     (lambda: dronefleet.run(rule=5), r"auction.rule must be a string, got int 5"),

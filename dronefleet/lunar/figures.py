@@ -1,0 +1,314 @@
+"""The lunar study's figures (spec LUNAR-FORAGING.md section 15) from tidy tables alone.
+
+Each function reads the tables :mod:`dronefleet.lunar.study` writes (network snapshots, one row
+per robot; per-condition curves, one row per time) and draws one figure as PNG, PDF and SVG with
+the style of :mod:`dronefleet.figstyle`: print size (a page wide,
+:data:`~dronefleet.figstyle.DOUBLE_COLUMN`), no text below 7 pt, no titles, panels lettered
+(a), (b), ... as the captions in ``results/README.md`` letter them; the same tables give the
+same bytes. Nothing here imports the simulator: the field is drawn from a layout
+(``dronefleet.lunar.layout.build``), given.
+
+Colours (Okabe-Ito): the key and region T (F_OUT, "to T") orange, N (F_IN, "to N") blue, R
+(recharger, "to R") bluish green; beacons black; dead robots vermillion crosses. Each
+condition has its :data:`CONDITION_STYLES` colour and line style in every curve figure.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..figstyle import DOUBLE_COLUMN, OKABE_ITO, PRINT_RC, Style, _figure, figure_paths, letter_panels, styles
+
+if TYPE_CHECKING:
+    import pandas
+
+#: Keys (and the region each leads to): colour of the vectors, the region disc and the role.
+KEY_COLOURS = {"T": OKABE_ITO["orange"], "N": OKABE_ITO["blue"], "R": OKABE_ITO["bluish green"]}
+#: Mobile roles: the colour of the key each one follows (F_OUT to T, F_IN to N, R to R).
+ROLE_COLOURS = {"F_OUT": KEY_COLOURS["T"], "F_IN": KEY_COLOURS["N"], "R": KEY_COLOURS["R"]}
+ROLE_WORDS = {"F_OUT": "F_OUT (to T)", "F_IN": "F_IN (to N)", "R": "R (to recharge)"}
+BEACON, DEAD = OKABE_ITO["black"], OKABE_ITO["vermillion"]
+#: A guidance vector of length v0 is drawn this long [m] (shorter ones in proportion).
+ARROW_M = 0.8
+#: Highlighted robots' paths (Figs 6-5, 6-6): colours that are none of the roles'.
+PATH_COLOURS = (OKABE_ITO["reddish purple"], OKABE_ITO["sky blue"], OKABE_ITO["vermillion"])
+#: The conditions' styles in the curve figures.
+CONDITION_STYLES = {
+    "OPEN": Style(OKABE_ITO["black"], "o", "-", ""),
+    "HARD-RT": Style(OKABE_ITO["vermillion"], "s", "--", "//"),
+    "SOFT-RT": Style(OKABE_ITO["bluish green"], "^", "-", ".."),
+    "SOFT-RT 7.5 Wh": Style(OKABE_ITO["sky blue"], "v", ":", "xx"),
+    "SOFT-RT 12.5 Wh": Style(OKABE_ITO["blue"], "D", "-.", "\\\\"),
+    "HARD-NT": Style(OKABE_ITO["orange"], "P", "--", "++"),
+    "SOFT-NT": Style(OKABE_ITO["orange"], "P", "-", "++"),
+    "HARD-NR": Style(OKABE_ITO["reddish purple"], "X", "--", "oo"),
+    "SOFT-NR": Style(OKABE_ITO["reddish purple"], "X", "-", "oo"),
+}
+#: Axis words of the time-series metrics and of the R-T trip metrics.
+METRIC_WORDS = {"resources": "resources returned F(t) [units]", "interruptions": "recharging interruptions C(t)",
+                "rate": "rate of return [units / 100 s]", "n_mobile": "mobile robots", "soc_sum": "sum of SOC",
+                "n_beacons": "beacons", "n_dead": "dead robots", "alignment_T": "alignment, key T",
+                "alignment_N": "alignment, key N", "alignment_R": "alignment, key R",
+                "soc_cost": "R-T trip SOC cost", "energy_wh": "R-T trip energy [Wh]",
+                "length_m": "R-T trip distance [m]", "duration_s": "R-T trip time [s]"}
+
+
+def _field(ax, geometry: Any) -> None:
+    """The walled field, the regions as discs (labelled) and the obstacle: hard solid grey, soft
+    a dashed outline hatched (passable, costlier ground)."""
+    from matplotlib.patches import Circle, Polygon, Rectangle
+
+    w, h = geometry.field
+    ax.add_patch(Rectangle((0, 0), w, h, fill=False, lw=1.6, ec="black", zorder=1))
+    for region, (x, y) in geometry.centres.items():
+        colour = KEY_COLOURS[region]
+        ax.add_patch(Circle((x, y), geometry.radii[region], fc=colour, ec=colour, alpha=0.18, lw=0, zorder=0))
+        ax.add_patch(Circle((x, y), geometry.radii[region], fill=False, ec=colour, lw=0.8, zorder=0))
+        ax.text(x, y, region, ha="center", va="center", fontsize=9, fontweight="bold", color=colour, alpha=0.6,
+                zorder=0)
+    if geometry.obstacle is not None:
+        corners = np.asarray(geometry.obstacle, dtype=float)
+        if geometry.obstacle_kind == "hard":
+            ax.add_patch(Polygon(corners, closed=True, fc="0.35", ec="black", lw=0.8, zorder=1))
+        else:
+            ax.add_patch(Polygon(corners, closed=True, fc="#e8dcc4", ec="0.3", lw=0.8, ls="--", hatch="....",
+                                 zorder=0))
+    ax.set_xlim(-0.2, w + 0.2)
+    ax.set_ylim(-0.2, h + 0.2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+
+def _network(ax, snapshot: pandas.DataFrame, geometry: Any, v0: float) -> None:
+    """One network snapshot (the rows of one label and time): the field, the beacons with a vector
+    per key whose |v^X| > 0 (length ARROW_M |v^X| / v0), the mobile robots coloured by role
+    (hollow while charging), dead robots as crosses."""
+    _field(ax, geometry)
+    alive = snapshot[snapshot["status"] == "alive"]
+    beacons = alive[alive["role"] == "B"]
+    for key, colour in KEY_COLOURS.items():
+        vx, vy = beacons[f"vx_{key}"].to_numpy(dtype=float), beacons[f"vy_{key}"].to_numpy(dtype=float)
+        has = np.hypot(vx, vy) > 0
+        if has.any():
+            scale = ARROW_M / v0
+            ax.quiver(beacons["x"].to_numpy()[has], beacons["y"].to_numpy()[has], vx[has] * scale, vy[has] * scale,
+                      color=colour, angles="xy", scale_units="xy", scale=1.0, width=0.004, headwidth=3.5,
+                      headlength=4.0, zorder=3)
+    ax.plot(beacons["x"], beacons["y"], "o", ms=3.0, color=BEACON, zorder=4, ls="none")
+    for role, colour in ROLE_COLOURS.items():
+        mine = alive[alive["role"] == role]
+        charging = (mine["mode"] == "charging").to_numpy()
+        ax.plot(mine["x"][~charging], mine["y"][~charging], "o", ms=4.0, color=colour, mec="black", mew=0.4,
+                ls="none", zorder=5)
+        ax.plot(mine["x"][charging], mine["y"][charging], "o", ms=4.0, mfc="white", mec=colour, mew=1.0, ls="none",
+                zorder=5)
+    dead = snapshot[snapshot["status"] == "dead"]
+    ax.plot(dead["x"], dead["y"], "x", ms=4.0, color=DEAD, mew=1.0, ls="none", zorder=5)
+
+
+def _network_legend(fig, paths: Sequence[str] = ()) -> None:
+    """The marks of the network figures, in one row under the panels."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], marker="o", ls="none", color=BEACON, ms=3.0, label="beacon")]
+    handles += [Line2D([], [], color=colour, lw=1.2, label=f"vector to {key}") for key, colour in KEY_COLOURS.items()]
+    handles += [Line2D([], [], marker="o", ls="none", color=colour, mec="black", mew=0.4, ms=4.0,
+                       label=ROLE_WORDS[role]) for role, colour in ROLE_COLOURS.items()]
+    handles += [Line2D([], [], marker="o", ls="none", mfc="white", mec="0.3", ms=4.0, label="charging"),
+                Line2D([], [], marker="x", ls="none", color=DEAD, ms=4.0, label="dead")]
+    handles += [Line2D([], [], color=PATH_COLOURS[k], lw=1.4, label=text) for k, text in enumerate(paths)]
+    fig.legend(handles=handles, loc="outside lower center", ncols=5, frameon=False)
+
+
+def _time_text(t: float) -> str:
+    return f"t = {t:.0f} s"
+
+
+def snapshot(rows: pandas.DataFrame, geometry: Any, v0: float, path: str | os.PathLike) -> list[Path]:
+    """Fig 6-3: one network snapshot (``rows``: the robots of one label and time of the snapshots
+    table), a page wide."""
+    with _figure(path, (DOUBLE_COLUMN * 0.75, 5.1), PRINT_RC) as (mpl, fig, ax):
+        _network(ax, rows, geometry, v0)
+        ax.text(0.01, 0.99, _time_text(float(rows["t"].iloc[0])), transform=ax.transAxes, ha="left", va="top")
+        _network_legend(fig)
+    return figure_paths(path)
+
+
+def panels(snapshots: Mapping[str, pandas.DataFrame | None], geometry: Mapping[str, Any] | Any, v0: float,
+           path: str | os.PathLike) -> list[Path]:
+    """Figs 6-4 and 6-9: one network panel per entry of ``snapshots`` (its words -> the robots of
+    one snapshot, or None for a milestone the run never reached), side by side, lettered.
+    ``geometry``: one layout for all, or one per entry."""
+    names = list(snapshots)
+    with _figure(path, (DOUBLE_COLUMN, 3.0), PRINT_RC, ncols=len(names), squeeze=False) as (mpl, fig, axes):
+        for ax, name in zip(axes.flat, names):
+            mine = geometry[name] if isinstance(geometry, Mapping) else geometry
+            rows = snapshots[name]
+            if rows is None:
+                _field(ax, mine)
+                ax.text(0.5, 0.5, "not reached in this run", transform=ax.transAxes, ha="center", va="center")
+                ax.set_title(name)
+                continue
+            _network(ax, rows, mine, v0)
+            ax.set_title(f"{name}, {_time_text(float(rows['t'].iloc[0]))}")
+        for ax in axes.flat[1:]:
+            ax.set_ylabel("")
+        letter_panels(axes.flat)
+        _network_legend(fig)
+    return figure_paths(path)
+
+
+def exploitation(frames: pandas.DataFrame, highlighted: Sequence[int], t_end: float, window_s: float,
+                 geometry: Any, v0: float, path: str | os.PathLike) -> list[Path]:
+    """Figs 6-5, 6-6: the network at the last frame at or before ``t_end`` and the paths of the
+    ``highlighted`` robots over the frames of (t_end - window_s, t_end] (positions every n_T,
+    joined by straight lines; a dot where each path ends)."""
+    times = np.sort(frames["t"].unique())
+    now = times[times <= t_end + 1e-9][-1]
+    window = frames[(frames["t"] > now - window_s - 1e-9) & (frames["t"] <= now + 1e-9)]
+    with _figure(path, (DOUBLE_COLUMN * 0.75, 5.1), PRINT_RC) as (mpl, fig, ax):
+        _network(ax, frames[frames["t"] == now], geometry, v0)
+        words = []
+        for colour, robot in zip(PATH_COLOURS, highlighted):
+            mine = window[window["robot"] == robot].sort_values("t")
+            ax.plot(mine["x"], mine["y"], "-", color=colour, lw=1.4, alpha=0.9, zorder=6)
+            ax.plot(mine["x"].iloc[-1:], mine["y"].iloc[-1:], "o", color=colour, ms=5.0, mec="black", mew=0.5,
+                    zorder=7)
+            words.append(f"robot {robot}")
+        ax.text(0.01, 0.99, f"{_time_text(now)}; paths over the last {window_s:g} s", transform=ax.transAxes,
+                ha="left", va="top")
+        _network_legend(fig, words)
+    return figure_paths(path)
+
+
+def _condition_styles(conditions: Sequence[str]) -> dict[str, Style]:
+    return styles(conditions, CONDITION_STYLES)
+
+
+def _band(ax, rows: pandas.DataFrame, x: str, style: Style, label: str) -> None:
+    """A mean line (``rows`` sorted by ``x``) with a band of +- one sd (NaN sd: no band there)."""
+    rows = rows.sort_values(x)
+    xs, mean, sd = (rows[c].to_numpy(dtype=float) for c in (x, "mean", "sd"))
+    ax.fill_between(xs, mean - sd, mean + sd, color=style.colour, alpha=0.18, lw=0)
+    ax.plot(xs, mean, ls=style.linestyle, color=style.colour, label=label)
+
+
+def _curve_panels(axes, curves: pandas.DataFrame, metrics: Sequence[str], conditions: Sequence[str],
+                  x: str = "t", minutes: bool = True) -> None:
+    """One panel per metric, one band per condition (in ``conditions`` order)."""
+    mine_styles = _condition_styles(conditions)
+    for ax, metric in zip(axes, metrics):
+        for condition in conditions:
+            rows = curves[(curves["metric"] == metric) & (curves["condition"] == condition)]
+            if len(rows):
+                rows = rows.assign(**{x: rows[x] / 60.0}) if minutes else rows
+                _band(ax, rows, x, mine_styles[condition], condition)
+        ax.set_ylabel(METRIC_WORDS.get(metric, metric))
+        ax.set_xlabel("time [min]")
+        ax.grid(alpha=0.3)
+
+
+def time_curves(curves: pandas.DataFrame, metrics: Sequence[str], conditions: Sequence[str],
+                path: str | os.PathLike, ncols: int = 3) -> list[Path]:
+    """Figs 6-7 a-e, the alignment diagnostic: each of ``metrics`` against time, one band (mean
+    +- sd) per condition, panels lettered in ``metrics`` order. ``curves``: rows of one selection
+    (:func:`dronefleet.lunar.experiments.curves`)."""
+    nrows = -(-len(metrics) // ncols)
+    with _figure(path, (DOUBLE_COLUMN, 2.3 * nrows + 0.5), PRINT_RC, nrows=nrows, ncols=ncols, squeeze=False) as \
+            (mpl, fig, axes):
+        used = list(axes.flat[:len(metrics)])
+        _curve_panels(used, curves, metrics, conditions)
+        for ax in axes.flat[len(metrics):]:
+            ax.set_visible(False)
+        letter_panels(used)
+        _condition_legend(fig, used[0])
+    return figure_paths(path)
+
+
+def _condition_legend(fig, ax) -> None:
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(6, len(labels)), frameon=False,
+               title="mean +- sd over the runs")
+
+
+def placement(curves: pandas.DataFrame, path: str | os.PathLike) -> list[Path]:
+    """Fig 6-11 a-f: resources (a soft, b hard), SOC sum (c soft, d hard), mobile robots (e soft,
+    f hard) against time, one band per obstacle location RT, NT, NR."""
+    metrics = ("resources", "soc_sum", "n_mobile")
+    with _figure(path, (DOUBLE_COLUMN, 7.2), PRINT_RC, nrows=3, ncols=2, squeeze=False) as (mpl, fig, axes):
+        for column, kind in enumerate(("SOFT", "HARD")):
+            conditions = [f"{kind}-{where}" for where in ("RT", "NT", "NR")]
+            _curve_panels(axes[:, column], curves, metrics, conditions)
+            axes[0, column].set_title(f"{kind.lower()} obstacle")
+            axes[0, column].legend(loc="upper left", frameon=False)
+        letter_panels(axes.flat)
+    return figure_paths(path)
+
+
+def trip_curves(bins: pandas.DataFrame, conditions: Sequence[str], bin_s: float, path: str | os.PathLike) -> list[Path]:
+    """Fig 6-8 a-d: the R-T trips' SOC cost, energy, distance and time against the entry time,
+    mean (a marker at each bin's middle) +- sd per bin, one per condition."""
+    from ..figstyle import MIN_FONT_SIZE
+
+    mine_styles = _condition_styles(conditions)
+    with _figure(path, (DOUBLE_COLUMN, 5.2), PRINT_RC, nrows=2, ncols=2, squeeze=False) as (mpl, fig, axes):
+        for ax, metric in zip(axes.flat, ("soc_cost", "energy_wh", "length_m", "duration_s")):
+            for condition in conditions:
+                rows = bins[(bins["metric"] == metric) & (bins["condition"] == condition)]
+                if len(rows):
+                    style = mine_styles[condition]
+                    rows = rows.assign(t=(rows["bin_start_s"] + bin_s / 2) / 60.0)
+                    _band(ax, rows, "t", style, condition)
+                    ax.plot(rows["t"], rows["mean"], ls="none", marker=style.marker, color=style.colour)
+            ax.set_ylabel(METRIC_WORDS[metric])
+            ax.set_xlabel(f"entry time [min] ({bin_s:g}-s bins)")
+            ax.tick_params(labelsize=MIN_FONT_SIZE)
+            ax.grid(alpha=0.3)
+        letter_panels(axes.flat)
+        _condition_legend(fig, axes.flat[0])
+    return figure_paths(path)
+
+
+def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence[str],
+            path: str | os.PathLike) -> list[Path]:
+    """The eps = 1 control (section 14): (a) resources returned against time per layout, with the
+    guidance network (solid) and without (eps = 1, dashed); (b) F(T_run) of each, mean +- sd,
+    with the share the control keeps written over its bar. ``stats``: run_stats rows of one
+    selection; conditions named "<layout>" and "<layout> eps=1"."""
+    colours = _condition_styles(layouts)
+    with _figure(path, (DOUBLE_COLUMN, 2.9), PRINT_RC, ncols=2, squeeze=False,
+                 width_ratios=(1.6, 1.0)) as (mpl, fig, axes):
+        ax, bars = axes[0]
+        for layout in layouts:
+            for condition, ls, words in ((layout, "-", "network"), (f"{layout} eps=1", "--", "eps = 1")):
+                rows = curves[(curves["metric"] == "resources") & (curves["condition"] == condition)]
+                if len(rows):
+                    _band(ax, rows.assign(t=rows["t"] / 60.0), "t",
+                          colours[layout]._replace(linestyle=ls), f"{layout}, {words}")
+        ax.set_xlabel("time [min]")
+        ax.set_ylabel(METRIC_WORDS["resources"])
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper left", frameon=False, ncols=1)
+        final = stats[stats["column"] == "resources"].set_index("condition")
+        for k, layout in enumerate(layouts):
+            for offset, condition, hatch in ((-0.2, layout, ""), (0.2, f"{layout} eps=1", "//")):
+                if condition not in final.index:
+                    continue
+                mean, sd = final.loc[condition, ["mean", "sd"]]
+                bars.bar(k + offset, mean, 0.38, yerr=sd, color=colours[layout].colour, hatch=hatch, ec="black",
+                         lw=0.5, error_kw={"lw": 0.8})
+            if layout in final.index and f"{layout} eps=1" in final.index and final.loc[layout, "mean"] > 0:
+                share = final.loc[f"{layout} eps=1", "mean"] / final.loc[layout, "mean"]
+                bars.annotate(f"{share:.0%}", (k + 0.2, final.loc[f"{layout} eps=1", "mean"]),
+                              xytext=(0, 3), textcoords="offset points", ha="center", va="bottom")
+        bars.set_xticks(range(len(layouts)), layouts)
+        bars.set_ylabel("F(T_run) [units]; plain: network, hatched: eps = 1")
+        bars.grid(alpha=0.3, axis="y")
+        letter_panels([ax, bars])
+    return figure_paths(path)

@@ -1,0 +1,283 @@
+"""The lunar study (spec LUNAR-FORAGING.md sections 12, 14, 15): the per-condition statistics on
+synthetic tables whose answers are known (the selected 30 are the top 30 by resources, means and
+sds, R-T trips of both directions binned by entry time, the median run), every figure drawn from
+its tables, --check re-deriving them, and the figures in ``reproduce --list``."""
+
+import math
+import sys
+import types
+from pathlib import Path
+
+import lunar_synthetic as synthetic
+import numpy as np
+import pandas as pd
+import pytest
+
+from dronefleet import reproduce
+from dronefleet.lunar import experiments, study
+from dronefleet.lunar.params import LunarParams
+
+pytest.importorskip("matplotlib")
+
+#: The synthetic experiments: their conditions as (layout, battery, eps).
+CONDITIONS = {
+    "e1": (("OPEN", 10.0, 0.05), ("HARD-RT", 10.0, 0.05), ("SOFT-RT", 10.0, 0.05)),
+    "e2": (("SOFT-RT", 7.5, 0.05), ("SOFT-RT", 12.5, 0.05)),
+    "e3": tuple((f"{kind}-{where}", 10.0, 0.05) for kind in ("HARD", "SOFT") for where in ("NT", "NR")),
+    "eps1": (("OPEN", 10.0, 1.0), ("HARD-RT", 10.0, 1.0), ("SOFT-RT", 10.0, 1.0)),
+}
+
+
+@pytest.fixture
+def fake_simulator(monkeypatch):
+    """dronefleet.lunar.simulate replaced by the synthetic tables."""
+    fake = types.ModuleType("dronefleet.lunar.simulate")
+    fake.simulate = synthetic.simulate
+    monkeypatch.setitem(sys.modules, "dronefleet.lunar.simulate", fake)
+    try:
+        import dronefleet.lunar.layout  # noqa: F401
+    except ImportError:
+        monkeypatch.setitem(sys.modules, "dronefleet.lunar.layout", synthetic.layout_module())
+    monkeypatch.setattr(experiments, "grid_path", lambda experiment: Path(f"lunar-{experiment}.toml"))
+    return fake
+
+
+class Context:
+    """A :class:`dronefleet.contract.StudyContext` over the synthetic sweeps, in this process."""
+
+    def __init__(self, root, quick=True):
+        self.root, self.quick, self.jobs, self.memo, self.lines = Path(root), quick, 1, {}, []
+        self.log = self.lines.append
+
+    def figure_dir(self, figure):
+        (self.root / figure).mkdir(parents=True, exist_ok=True)
+        return self.root / figure
+
+    def load_sweep(self, path, changes=None):
+        experiment = Path(path).stem.removeprefix("lunar-")
+        configs = [LunarParams(layout=layout, battery_wh=battery, eps=eps, **(changes or {}))
+                   for layout, battery, eps in CONDITIONS[experiment]]
+        return types.SimpleNamespace(runs=[types.SimpleNamespace(config=c) for c in configs])
+
+    def map(self, function, items):
+        return ((item, function(item), None) for item in items)
+
+    def write_table(self, frame, path):
+        frame.to_parquet(path, index=False)
+        return path
+
+    def read_table(self, figure, name):
+        frame = pd.read_parquet(self.root / figure / f"{name}.parquet")
+        assert set(study.TABLE_COLUMNS[name]) <= set(frame.columns), name
+        return frame
+
+
+def synthetic_summary(conditions=(("OPEN", 10.0, 0.05), ("SOFT-RT", 7.5, 0.05)), runs=50):
+    frames = []
+    for layout, battery, eps in conditions:
+        params = LunarParams(layout=layout, battery_wh=battery, eps=eps, runs=runs, duration_s=600.0)
+        summary = synthetic.simulate(params)["summary"].to_pandas()
+        summary.insert(0, "condition", experiments.condition_of(layout, battery, eps))
+        frames.append(summary)
+    return pd.concat(frames, ignore_index=True)
+
+
+def test_the_selected_are_each_conditions_30_runs_with_most_resources():
+    summary = synthetic_summary()
+    chosen = experiments.selected(summary)
+    for _, mine in summary.groupby("condition"):
+        keep = chosen[mine.index]
+        assert keep.sum() == 30
+        assert mine["resources"][keep].min() >= mine["resources"][~keep].max()
+        # not simply the first 30 runs: the synthetic resources are scrambled by run
+        assert set(mine["run"][keep]) != set(range(30))
+    assert experiments.selected_count(50) == 30 and experiments.selected_count(5) == 3
+
+
+def test_ties_at_the_cut_keep_the_lower_run_index():
+    summary = pd.DataFrame({"condition": "X", "run": np.arange(5), "resources": [7, 9, 7, 7, 1]})
+    assert experiments.selected(summary).tolist() == [True, True, True, False, False]  # 3 of 5
+
+
+def test_curves_are_the_mean_and_sd_over_the_selected_runs_and_over_all():
+    conditions = (("OPEN", 10.0, 0.05),)
+    summary = synthetic_summary(conditions)
+    params = LunarParams(layout="OPEN", runs=50, duration_s=600.0)
+    timeseries = synthetic.simulate(params)["timeseries"].to_pandas().assign(condition="OPEN")
+    curves = experiments.curves(timeseries, summary)
+    top = summary.sort_values(["resources", "run"], ascending=[False, True])["run"][:30]
+    t = timeseries["t"].unique()[3]
+    for selection, runs in (("selected", set(top)), ("all", set(range(50)))):
+        values = timeseries[(timeseries["t"] == t) & timeseries["run"].isin(runs)]["resources"].to_numpy(float)
+        row = curves[(curves["selection"] == selection) & (curves["metric"] == "resources") & (curves["t"] == t)]
+        assert len(row) == 1 and row["runs"].item() == len(runs)
+        assert row["mean"].item() == pytest.approx(values.mean(), rel=1e-12)
+        assert row["sd"].item() == pytest.approx(values.std(ddof=1), rel=1e-12)
+    # the first record's alignment is NaN in every run: no runs, no mean there
+    first = curves[(curves["metric"] == "alignment_T") & (curves["t"] == timeseries["t"].min())]
+    assert (first["runs"] == 0).all() and first["mean"].isna().all()
+    assert set(curves["metric"]) == set(experiments.CURVE_METRICS)
+
+
+def test_rt_trips_of_both_directions_are_binned_by_entry_time():
+    params = LunarParams(layout="SOFT-RT", runs=4, duration_s=1000.0)
+    trips = synthetic.simulate(params)["trips"].to_pandas()
+    rt = experiments.rt_trips(trips, params.tau).assign(condition="SOFT-RT")
+    assert set(zip(rt["origin"], rt["dest"])) == {("R", "T"), ("T", "R")}   # N-T left out
+    assert np.allclose(rt["t_entered"], rt["tick_entered"] * params.tau)
+    summary = pd.DataFrame({"condition": "SOFT-RT", "run": range(4), "resources": [1, 5, 3, 2]})
+    bins = experiments.trip_bins(rt, summary, bin_s=300.0)
+    length = bins[(bins["metric"] == "length_m") & (bins["selection"] == "all")].set_index("bin_start_s")
+    for start in (0.0, 300.0, 600.0):
+        mine = rt[(rt["t_entered"] >= start) & (rt["t_entered"] < start + 300.0)]
+        assert length.loc[start, "trips"] == len(mine) > 0
+        assert length.loc[start, "mean"] == pytest.approx(mine["length_m"].mean(), rel=1e-12)
+    selected = bins[(bins["metric"] == "length_m") & (bins["selection"] == "selected")]
+    chosen = rt[rt["run"].isin([1, 2])]   # 2 of 4 runs (30 of 50, rounded): those with most resources
+    assert selected["trips"].sum() == len(chosen)
+    assert set(bins["metric"]) == set(experiments.TRIP_METRICS)
+
+
+def test_the_median_run_is_the_middle_of_the_selected():
+    summary = pd.DataFrame({"condition": ["A"] * 5 + ["B"] * 2, "run": [0, 1, 2, 3, 4, 0, 1],
+                            "resources": [10, 50, 30, 40, 20, 4, 4]})
+    # A: the 3 selected are 50, 40, 30 -> median 40 (run 3); B: 1 of 2 selected (run 0)
+    assert experiments.median_runs(summary).to_dict("records") == [
+        {"condition": "A", "run": 3, "resources": 40}, {"condition": "B", "run": 0, "resources": 4}]
+    fifty = synthetic_summary(runs=50)
+    medians = experiments.median_runs(fifty).set_index("condition")
+    for condition, mine in fifty[experiments.selected(fifty)].groupby("condition"):
+        ordered = sorted(zip(mine["resources"], mine["run"]))
+        assert (medians.loc[condition, "resources"], medians.loc[condition, "run"]) == ordered[14]
+
+
+def test_run_stats_leave_out_nan_deaths_per_session():
+    stats = experiments.run_stats(synthetic_summary(runs=8))
+    row = stats[(stats["column"] == "deaths_per_session") & (stats["selection"] == "all")
+                & (stats["condition"] == "OPEN")]
+    assert row["runs"].item() == 6   # runs 0 and 4 had no session
+
+
+def test_the_highlighted_robots_travelled_farthest_while_mobile():
+    frames = pd.DataFrame({"robot": [0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3], "t": [10.0, 20.0, 30.0] * 4,
+                           "x": [0, 5, 5, 0, 1, 2, 0, 9, 9, 0, 3, 6], "y": [0.0] * 12,
+                           "status": ["alive"] * 12, "role": ["F_OUT"] * 6 + ["B"] * 3 + ["R"] * 3})
+    assert experiments.highlighted(frames, 30.0, 300.0) == [3, 0, 1]   # robot 2 is a beacon
+    assert experiments.highlighted(frames, 30.0, 15.0) == [3, 1]       # robot 0 did not move in (15, 30]
+
+
+def test_chunks_cover_the_configurations_runs():
+    parts = experiments.chunks(LunarParams(runs=23, first_run=4), size=10)
+    assert [(p.first_run, p.runs) for p in parts] == [(4, 10), (14, 10), (24, 3)]
+
+
+def test_a_condition_holding_a_run_twice_is_refused(fake_simulator):
+    from dronefleet.config import SweepError
+
+    with pytest.raises(SweepError, match="condition 'OPEN' holds run 0 twice"):
+        experiments.run_configs([LunarParams(layout="OPEN", runs=2, duration_s=100.0),
+                                 LunarParams(layout="OPEN", runs=2, duration_s=100.0, seed=3)], "e1")
+
+
+@pytest.fixture
+def synthetic_results(fake_simulator, tmp_path):
+    """Every lunar figure tidied and drawn from the synthetic experiments (--quick sizes)."""
+    context = Context(tmp_path)
+    study.run_together(context, list(study.FIGURES))
+    files = {}
+    for figure in study.FIGURES:
+        study.tidy(context, figure)
+        files[figure] = study.draw(context, figure)
+    return context, files
+
+
+def test_every_figure_is_drawn_from_its_tables(synthetic_results):
+    context, files = synthetic_results
+    for figure in study.FIGURES:
+        names = {path.name for path in files[figure]}
+        assert f"{figure}.png" in names and f"{figure}.pdf" in names and f"{figure}.svg" in names, figure
+        assert all(path.stat().st_size > 0 for path in files[figure])
+    assert (context.root / "lunar-fig07" / "lunar-fig07-alignment.svg").exists()
+    runs = pd.read_parquet(context.root / "lunar-fig07" / "runs.parquet")
+    assert list(runs.columns[:8]) == [*experiments.CONDITION_COLUMNS, "v0", "run"]
+    assert set(runs["condition"]) == {"OPEN", "HARD-RT", "SOFT-RT"}
+    assert len(runs) == 3 * study.QUICK_CHANGES["runs"] and runs["selected"].sum() == 3 * 3
+    assert set(pd.read_parquet(context.root / "lunar-fig08" / "bins.parquet")["condition"]) == {
+        "OPEN", "HARD-RT", "SOFT-RT", "SOFT-RT 7.5 Wh", "SOFT-RT 12.5 Wh"}
+    assert set(pd.read_parquet(context.root / "lunar-fig11" / "runs.parquet")["condition"]) == {
+        "HARD-RT", "SOFT-RT", "HARD-NT", "HARD-NR", "SOFT-NT", "SOFT-NR"}
+    assert set(pd.read_parquet(context.root / "lunar-control" / "runs.parquet")["condition"]) == {
+        "OPEN", "HARD-RT", "SOFT-RT", "OPEN eps=1", "HARD-RT eps=1", "SOFT-RT eps=1"}
+
+
+def test_fig09_draws_each_capacitys_median_run(synthetic_results):
+    context, _ = synthetic_results
+    d = context.root / "lunar-fig09"
+    median, snapshots = pd.read_parquet(d / "median.parquet"), pd.read_parquet(d / "snapshots.parquet")
+    assert set(median["condition"]) == {"SOFT-RT", "SOFT-RT 7.5 Wh", "SOFT-RT 12.5 Wh"}
+    for row in median.itertuples():
+        mine = snapshots[snapshots["condition"] == row.condition]
+        assert set(mine["run"]) == {row.run} and set(mine["label"]) == {"end"} and len(mine) == 50
+
+
+def test_the_e0_figures_draw_the_milestones_and_the_exploitation_window(synthetic_results):
+    context, _ = synthetic_results
+    fig04 = pd.read_parquet(context.root / "lunar-fig04" / "snapshots.parquet")
+    assert sorted(set(fig04["label"])) == ["first_R", "first_T", "first_row5"]
+    fig05 = pd.read_parquet(context.root / "lunar-fig05" / "snapshots.parquet")
+    assert set(fig05["label"]) == {"frame"} and fig05["t"].max() <= 300.0 + 1e-9
+    assert fig05["t"].max() - fig05["t"].min() < study.PATH_WINDOW_S
+    highlighted = pd.read_parquet(context.root / "lunar-fig06" / "highlighted.parquet")["robot"].tolist()
+    assert len(highlighted) == 3 and all(robot >= 20 for robot in highlighted)   # no beacon
+
+
+def test_check_re_derives_every_table_and_finds_a_changed_value(synthetic_results):
+    context, _ = synthetic_results
+    for figure in study.FIGURES:
+        assert study.check(context, figure) == [], figure
+    curves = context.root / "lunar-fig07" / "curves.parquet"
+    table = pd.read_parquet(curves)
+    derived = float(table.loc[5, "mean"])
+    table.loc[5, "mean"] = derived + 1.0
+    table.to_parquet(curves, index=False)
+    assert study.check(context, "lunar-fig07") == [
+        f"lunar-fig07 curves row 5: mean committed {derived + 1.0!r}, re-derived {derived!r}"]
+    runs = context.root / "lunar-fig08" / "runs.parquet"
+    table = pd.read_parquet(runs)
+    best = table[table["condition"] == "OPEN"].sort_values("resources").index[-1]
+    table.loc[best, "trips"] += 1
+    table.to_parquet(runs, index=False)
+    found = study.check(context, "lunar-fig08")
+    assert len(found) == 1 and found[0].startswith("lunar-fig08 OPEN run ") and "trips committed" in found[0]
+
+
+def test_check_without_tables_says_what_to_run(tmp_path):
+    from dronefleet.config import SweepError
+
+    with pytest.raises(SweepError, match="run dronefleet reproduce lunar-fig07 --quick first"):
+        study.check(Context(tmp_path), "lunar-fig07")
+
+
+def test_a_tampered_layout_is_refused_in_one_line_naming_the_file(synthetic_results):
+    from dronefleet.config import SweepError
+
+    context, _ = synthetic_results
+    runs = context.root / "lunar-fig07" / "runs.parquet"
+    table = pd.read_parquet(runs)
+    table.loc[0, "layout"] = "MOON"
+    table.to_parquet(runs, index=False)
+    with pytest.raises(SweepError, match=f"{runs}: layout 'MOON' is not one of OPEN"):
+        study.draw(context, "lunar-fig07")
+
+
+def test_the_quick_mode_is_stated():
+    assert study.QUICK == "5 runs of 600 s per condition (the 3 with most resources kept)"
+    assert math.isclose(study.e0_config(True).duration_s, 600.0) and study.e0_config(False).duration_s == 3600.0
+    assert study.e0_config(False).frames and study.e0_config(False).layout == "SOFT-RT"
+
+
+def test_reproduce_lists_the_lunar_figures():
+    listing = reproduce.list_studies()
+    assert "lunar: " in listing
+    assert " ".join(study.FIGURES) in listing
+    assert reproduce.owner("lunar-fig07") is study

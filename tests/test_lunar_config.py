@@ -335,3 +335,9 @@ def test_the_guide_lists_every_key_and_every_option_word():
         assert all(f'"{word}"' in guide for word in words), name
     for limit in ("A42", "A43", "A44"):
         assert f"**{limit}," in guide
+
+
+def test_the_figures_are_the_studys():
+    study = SCENARIO.study
+    assert SCENARIO.figures == study.FIGURES and SCENARIO.figures[0] == "lunar-fig03"
+    assert all(name.startswith("lunar-") for name in SCENARIO.figures)

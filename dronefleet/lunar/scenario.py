@@ -52,11 +52,12 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "RUN_LIMITS",
            "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config",
-           "run_size", "table_schemas", "simulate", "format_summary", "describe", "label"]
+           "run_size", "table_schemas", "simulate", "format_summary", "describe", "label", "study"]
 
 NAME = "lunar"
 TABLES = ("summary", "timeseries", "trips", "snapshots")
-FIGURES: tuple[str, ...] = ()
+#: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.lunar.study`).
+FIGURES: tuple[str, ...] = (*(f"lunar-fig{k:02d}" for k in (3, 4, 5, 6, 7, 8, 9, 11)), "lunar-control")
 SEED_KEY = "first_run"
 SEEDS_REQUIRED = False
 
@@ -404,3 +405,9 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         lines.append(f"  {text:<28}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}{note}")
     return "\n".join(lines)
 
+
+def study() -> Any:
+    """Figs 6-3 to 6-11 and the eps = 1 control in ``dronefleet reproduce``: :mod:`dronefleet.lunar.study`."""
+    from . import study as figures
+
+    return figures

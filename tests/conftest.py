@@ -151,6 +151,19 @@ steps = 50
 algorithm = ["R", "GR"]
 capacity = [2, 10]
 """,
+    "lunar": """
+[sweep]
+name = "tiny"
+scenario = "lunar"
+runs_per_task = 2
+[set]
+runs = 2
+n_robots = 30
+duration_s = 60.0
+[grid]
+layout = ["OPEN", "SOFT-RT"]
+los_bodies = [false, true]
+""",
 }
 
 

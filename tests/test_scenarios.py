@@ -21,6 +21,7 @@ TINY = {
     "delivery": ("", ["horizon_weeks=0.02", "n_uavs=3"]),
     "replenishment": ('scenario = "replenishment"\n', ["trials=2", "ticks=300"]),
     "items": ('scenario = "items"\n', ["trials=2", "steps=200"]),
+    "lunar": ('scenario = "lunar"\n', ["runs=2", "n_robots=30", "duration_s=60"]),
 }
 # Columns each scenario's summary table must have.
 SUMMARY_COLUMNS = {
@@ -28,6 +29,8 @@ SUMMARY_COLUMNS = {
     "replenishment": {"trial", "seed", "work", "energy", "work_energy", "efficiency", "depleted_workers",
                       "depleted_chargers", "shared", "lost"},
     "items": {"trial", "seed", "generated", "served", "rate", "trips", "visits", "items_per_trip"},
+    "lunar": {"run", "seed", "resources", "trips", "interruptions", "sessions", "deaths", "beacons", "alignment_T",
+              "alignment_N", "alignment_R"},
 }
 
 

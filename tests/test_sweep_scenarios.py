@@ -14,7 +14,7 @@ import pytest
 from conftest import TINY_SWEEPS as TINY
 from dronefleet import cli, scenarios, sweeps as sw
 
-ARROW_TYPES = {float: pa.float64(), int: pa.int64(), str: pa.string()}
+ARROW_TYPES = {float: pa.float64(), int: pa.int64(), str: pa.string(), bool: pa.bool_()}
 
 
 def write(tmp_path, text, name="tiny.toml"):

@@ -8,11 +8,31 @@ every scenario is paired with run j of every other.
 
 from __future__ import annotations
 
+import functools
+from pathlib import Path
+
+import numpy as np
 import pyarrow as pa
 
+from .. import interrupt
+from ..supervisor import load_supervisor
+from . import kernel as k
+from .layout import build, kernel_geometry
 from .params import LunarParams
 
-__all__ = ["simulate", "table_schemas", "TABLES"]
+__all__ = ["simulate", "table_schemas", "run_seeds", "kernel_inputs", "run_kernel", "role_table",
+           "TABLES", "EVENTS", "ROLES_FILE"]
+
+#: The robots' roles as a Nadzoru 2 supervisor (spec section 9).
+ROLES_FILE = Path(__file__).resolve().parent.parent / "data" / "lunar-roles.yaml"
+#: The supervisor events the kernel fires, in the kernel's EV_* column order.
+EVENTS = ("becomeBeacon", "goCharge", "charge", "goOut", "goIn", "load", "unload", "revert", "turnAround",
+          "depleted")
+ROLE_NAMES = ("F_OUT", "F_IN", "R", "B")
+STATUS_NAMES = ("unspawned", "alive", "dead")
+MODE_NAMES = ("normal", "charging", "reconnect", "backtrack")
+REGION_NAMES = ("T", "N", "R")
+LABEL_NAMES = ("first_T", "first_R", "first_row5", "periodic", "end", "frame")
 
 TABLES = ("summary", "timeseries", "trips", "snapshots")
 _I, _F, _S = pa.int64(), pa.float64(), pa.string()
@@ -50,6 +70,132 @@ def table_schemas() -> dict[str, pa.Schema]:
             zip(TABLES, (_SUMMARY, _TIMESERIES, _TRIPS, _SNAPSHOTS))}
 
 
+@functools.lru_cache(maxsize=1)
+def role_table() -> tuple[np.ndarray, int]:
+    """(transition table (1, states, len(EVENTS)) int64, initial state) of :data:`ROLES_FILE`."""
+    automaton = load_supervisor(ROLES_FILE)
+    table = automaton.transition_table(EVENTS)
+    table.setflags(write=False)
+    return table, int(automaton.init_state[0])
+
+
+def run_seeds(params: LunarParams) -> tuple[np.ndarray, np.ndarray]:
+    """(run indices, root seeds) int64 of runs first_run .. first_run + runs - 1: run j draws from
+    seed * 2**32 + j, whatever the layout and options (section 13: common random numbers)."""
+    runs = np.arange(params.first_run, params.first_run + params.runs, dtype=np.int64)
+    return runs, np.int64(params.seed) * np.int64(2**32) + runs
+
+
+def kernel_inputs(params: LunarParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(opts int64 (N_OPTS,), pars float64 (N_PARS,), geometry (22,)) of ``params`` for the kernel."""
+    p = params
+    opts = np.zeros(k.N_OPTS, dtype=np.int64)
+    opts[k.O_ROBOTS], opts[k.O_TICKS], opts[k.O_NT] = p.n_robots, p.ticks, p.n_T
+    opts[k.O_RMAX], opts[k.O_BLOCKED] = p.r_max, p.blocked_ticks
+    opts[k.O_RATE_W], opts[k.O_SNAP_EVERY] = p.rate_window_ticks, max(1, p.snapshot_every_ticks)
+    opts[k.O_FRAMES] = p.frames
+    opts[k.O_AVOID_TURN] = p.avoidance == "turn"
+    opts[k.O_BCAST_MOTION] = p.broadcast_velocity == "motion"
+    opts[k.O_BCAST_UPDATE] = p.broadcast == "update"
+    opts[k.O_WFORM] = ("exponent", "bracket", "literal").index(p.weight_form)
+    opts[k.O_FALLBACK_LITERAL] = p.fallback == "literal"
+    opts[k.O_TURN_ANY] = p.turn_on == "any"
+    opts[k.O_LOS_BODIES] = p.los_bodies
+    opts[k.O_REDECIDE] = ("none", "avoid_clear", "beacon_change").index(p.redecide)
+    opts[k.O_COMPLETION_LAST] = p.completion == "last_region"
+    opts[k.O_INIT_STATE] = role_table()[1]
+    pars = np.zeros(k.N_PARS)
+    pars[k.P_TAU], pars[k.P_RHO_W], pars[k.P_RHO_V], pars[k.P_RHO_P] = p.tau, p.rho_w, p.rho_v, p.rho_p
+    pars[k.P_RHO_F], pars[k.P_RHO_C], pars[k.P_COMM_R], pars[k.P_ETA_W] = p.rho_f, p.rho_c, p.comm_radius, p.eta_w
+    pars[k.P_PHI], pars[k.P_V0], pars[k.P_EPS], pars[k.P_REWARD] = p.phi_soc, p.v0, p.eps, p.reward
+    pars[k.P_LAMBDA], pars[k.P_KAPPA], pars[k.P_ECAP], pars[k.P_SOC0] = p.diffusion, p.kappa_soft, p.e_cap_j, p.soc0
+    pars[k.P_MOVE], pars[k.P_COMP], pars[k.P_COMM], pars[k.P_SCAN] = p.p_move, p.p_comp, p.p_comm, p.p_scan
+    pars[k.P_AVOID], pars[k.P_EXPLOIT], pars[k.P_SOLAR] = p.p_avoid, p.e_exploit, p.p_solar
+    pars[k.P_RBODY], pars[k.P_IR] = p.r_body, p.ir_range
+    return opts, pars, kernel_geometry(build(p))
+
+
+def run_kernel(params: LunarParams) -> tuple[np.ndarray, ...]:
+    """The kernel's raw outputs for every run of ``params`` (Ctrl-C stops it): summary
+    (runs, N_SUMMARY), series (runs, records, N_SERIES), trips (rows, N_TRIP), snapshots
+    (rows, N_SNAP), float64 (see the column indices of :mod:`dronefleet.lunar.kernel`)."""
+    opts, pars, geometry = kernel_inputs(params)
+    runs, seeds = run_seeds(params)
+    return interrupt.call(k.run_runs, opts, pars, geometry, seeds, runs, role_table()[0],
+                          culprit="the lunar kernel")
+
+
+def _names(codes: np.ndarray, names: tuple[str, ...]) -> pa.Array:
+    return pa.array(np.asarray(names, dtype=object)[codes.astype(np.int64)], type=pa.string())
+
+
 def simulate(params: LunarParams) -> dict[str, pa.Table]:
-    """Every run of ``params`` (first_run .. first_run + runs - 1): ``{table: pyarrow.Table}``."""
-    raise NotImplementedError("the lunar kernel is not written yet")
+    """Every run of ``params`` (first_run .. first_run + runs - 1): ``{table: pyarrow.Table}`` with
+    the columns of :func:`table_schemas` (summary, timeseries, trips, snapshots; spec sections 12, 19).
+
+    ``params`` must be valid (``dronefleet.lunar.scenario`` validates it); nothing is checked here.
+    """
+    summary, series, trips, snaps = run_kernel(params)
+    schemas = table_schemas()
+    runs, seeds = run_seeds(params)
+    tau = params.tau
+    i64 = lambda a: np.asarray(a).astype(np.int64)  # noqa: E731 (integers stored exactly in float64)
+    sessions = summary[:, k.SM_SESSIONS]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        per_session = np.where(sessions > 0, summary[:, k.SM_DEATHS] / np.maximum(sessions, 1), np.nan)
+    cols = {"run": runs, "seed": seeds, "layout": pa.array([params.layout] * len(runs), type=pa.string()),
+            "battery_wh": np.full(len(runs), float(params.battery_wh))}
+    for name, c in (("resources", k.SM_RESOURCES), ("trips", k.SM_TRIPS), ("interruptions", k.SM_INTERRUPTIONS),
+                    ("nest_recharges", k.SM_NEST_RECHARGES), ("sessions", k.SM_SESSIONS), ("deaths", k.SM_DEATHS),
+                    ("beacons", k.SM_BEACONS), ("mobile", k.SM_MOBILE), ("units_beacons", k.SM_UNITS_BEACONS)):
+        cols[name] = i64(summary[:, c])
+    for q, region in enumerate(REGION_NAMES):
+        cols[f"alignment_{region}"] = summary[:, k.SM_ALIGN + q]
+        cols[f"alignment_w_{region}"] = summary[:, k.SM_ALIGN_W + q]
+        cols[f"heading_alignment_{region}"] = summary[:, k.SM_HEAD_ALIGN + q]
+    cols["deaths_per_session"] = per_session
+    for name, c in (("t_first_T", k.SM_T_FIRST_T), ("t_first_R", k.SM_T_FIRST_R),
+                    ("t_first_row5", k.SM_T_FIRST_ROW5), ("t_beacons_90", k.SM_T_BEACONS_90)):
+        cols[name] = summary[:, c]
+    for r, name in enumerate(ROW_NAMES):
+        cols[name] = i64(summary[:, k.SM_ROWS + r])
+    tables = {"summary": pa.table(cols, schema=schemas["summary"])}
+
+    n_runs, n_rec = series.shape[:2]
+    flat = series.reshape(n_runs * n_rec, k.N_SERIES)
+    cols = {"run": np.repeat(runs, n_rec), "t": flat[:, k.TS_K] * tau}
+    for name, c, integer in (
+            ("resources", k.TS_RESOURCES, True), ("trips", k.TS_TRIPS, True),
+            ("interruptions", k.TS_INTERRUPTIONS, True), ("nest_recharges", k.TS_NEST_RECHARGES, True),
+            ("sessions", k.TS_SESSIONS, True), ("rate", k.TS_RATE, False), ("n_mobile", k.TS_MOBILE, True),
+            ("n_beacons", k.TS_BEACONS, True), ("n_dead", k.TS_DEAD, True), ("n_unspawned", k.TS_UNSPAWNED, True),
+            ("n_f_out", k.TS_F_OUT, True), ("n_f_in", k.TS_F_IN, True), ("n_r", k.TS_R, True),
+            ("soc_sum", k.TS_SOC_SUM, False), ("soc_beacons", k.TS_SOC_BEACONS, False),
+            ("soc_mobile", k.TS_SOC_MOBILE, False), ("soc_min_beacon", k.TS_SOC_MIN_BEACON, False),
+            ("units_beacons", k.TS_UNITS_BEACONS, True)):
+        cols[name] = i64(flat[:, c]) if integer else flat[:, c]
+    for q, region in enumerate(REGION_NAMES):
+        cols[f"alignment_{region}"] = flat[:, k.TS_ALIGN + q]
+    tables["timeseries"] = pa.table(cols, schema=schemas["timeseries"])
+
+    energy = trips[:, k.TR_ENERGY]
+    left, entered = i64(trips[:, k.TR_TICK_LEFT]), i64(trips[:, k.TR_TICK_ENTERED])
+    tables["trips"] = pa.table({
+        "run": i64(trips[:, k.TR_RUN]), "origin": _names(trips[:, k.TR_ORIGIN], REGION_NAMES),
+        "dest": _names(trips[:, k.TR_DEST], REGION_NAMES), "tick_left": left, "tick_entered": entered,
+        "length_m": trips[:, k.TR_LENGTH], "energy_j": energy, "energy_wh": energy / 3600.0,
+        "soc_cost": energy / params.e_cap_j, "duration_s": (entered - left) * tau,
+        "soft_length_m": trips[:, k.TR_SOFT], "role_left": _names(trips[:, k.TR_ROLE_LEFT], ROLE_NAMES),
+        "role_entered": _names(trips[:, k.TR_ROLE_ENTERED], ROLE_NAMES), "robot": i64(trips[:, k.TR_ROBOT]),
+    }, schema=schemas["trips"])
+
+    cols = {"run": i64(snaps[:, k.SN_RUN]), "label": _names(snaps[:, k.SN_LABEL], LABEL_NAMES),
+            "t": snaps[:, k.SN_K] * tau, "robot": i64(snaps[:, k.SN_ROBOT]),
+            "status": _names(snaps[:, k.SN_STATUS], STATUS_NAMES), "role": _names(snaps[:, k.SN_ROLE], ROLE_NAMES),
+            "mode": _names(snaps[:, k.SN_MODE], MODE_NAMES), "x": snaps[:, k.SN_X], "y": snaps[:, k.SN_Y],
+            "heading": snaps[:, k.SN_HEADING], "soc": snaps[:, k.SN_SOC], "load": i64(snaps[:, k.SN_LOAD])}
+    for first, quantity in ((k.SN_OMEGA, "omega"), (k.SN_VX, "vx"), (k.SN_VY, "vy"), (k.SN_S, "S")):
+        for q, region in enumerate(REGION_NAMES):
+            cols[f"{quantity}_{region}"] = snaps[:, first + q]
+    tables["snapshots"] = pa.table(cols, schema=schemas["snapshots"])
+    return tables

@@ -1,0 +1,1219 @@
+"""Compiled kernel of the lunar foraging-with-recharging model (spec LUNAR-FORAGING.md, sections 2-13).
+
+One call of :func:`run_runs` runs every run of one configuration; each run seeds one xoshiro
+stream per robot from the run's root seed and the robot's id (section 13: the same streams in
+every scenario), and steps ticks k = 1..K in the order of section 11. State is a structure of
+plain arrays indexed by robot id (spawn order). Roles are the states of the role supervisor
+(``dronefleet/data/lunar-roles.yaml``): a row of section 9 fires only through
+:func:`dronefleet.supervisor.take` on its transition table.
+
+Only + - * / sqrt, floor and :mod:`dronefleet.fpmath` (sincos, atan2, exp, log) touch the
+trajectory, so a run is bit-identical on any CPU. The rules the tests pin are small functions
+of plain arrays: :func:`beacon_update` (section 6), :func:`beacon_weight`, :func:`guidance` and
+:func:`follow_or_search` (7.1), :func:`avoidance_offset` (7.4), :func:`power_out` and
+:func:`energy_step` (section 8).
+"""
+
+import numpy as np
+
+from ..fpmath import atan2, exp, log, sincos
+from ..jit import njit
+from ..rng import seed_stream, uniform
+from ..supervisor import take
+
+# Roles (= keys for mobile roles: key F_OUT <-> region T, F_IN <-> N, R <-> R), statuses, modes.
+F_OUT, F_IN, R, B = 0, 1, 2, 3
+REG_T, REG_N, REG_R = 0, 1, 2
+NO_REGION = -1
+UNSPAWNED, ALIVE, DEAD = 0, 1, 2
+NORMAL, CHARGING, RECONNECT, BACKTRACK = 0, 1, 2, 3
+# States of the role supervisor (lunar-roles.yaml) and the role each one is.
+S_F_OUT, S_F_IN, S_R, S_R_CHARGING, S_B_F_OUT, S_B_F_IN, S_B_R, S_DEAD = range(8)
+# Columns of the transition table the kernel is given (simulate.EVENTS, in this order).
+(EV_BECOME_BEACON, EV_GO_CHARGE, EV_CHARGE, EV_GO_OUT, EV_GO_IN, EV_LOAD, EV_UNLOAD, EV_REVERT,
+ EV_TURN_AROUND, EV_DEPLETED) = range(10)
+# Weight forms (A12), redecide options (A41).
+W_EXPONENT, W_BRACKET, W_LITERAL = 0, 1, 2
+REDECIDE_NONE, REDECIDE_AVOID_CLEAR, REDECIDE_BEACON_CHANGE = 0, 1, 2
+
+# Integer options and float parameters: indices into ``opts`` and ``pars``.
+(O_ROBOTS, O_TICKS, O_NT, O_RMAX, O_BLOCKED, O_RATE_W, O_SNAP_EVERY, O_FRAMES, O_AVOID_TURN,
+ O_BCAST_MOTION, O_BCAST_UPDATE, O_WFORM, O_FALLBACK_LITERAL, O_TURN_ANY, O_LOS_BODIES, O_REDECIDE,
+ O_COMPLETION_LAST, O_INIT_STATE) = range(18)
+N_OPTS = 18
+(P_TAU, P_RHO_W, P_RHO_V, P_RHO_P, P_RHO_F, P_RHO_C, P_COMM_R, P_ETA_W, P_PHI, P_V0, P_EPS, P_REWARD,
+ P_LAMBDA, P_KAPPA, P_ECAP, P_SOC0, P_MOVE, P_COMP, P_COMM, P_SCAN, P_AVOID, P_EXPLOIT, P_SOLAR,
+ P_RBODY, P_IR) = range(25)
+N_PARS = 25
+
+# Geometry array (layout.kernel_geometry).
+G_W, G_H, G_CX, G_CY, G_RAD, G_KIND, G_CORNERS, G_SPAWN = 0, 1, 2, 5, 8, 11, 12, 20
+KIND_NONE, KIND_HARD, KIND_SOFT = 0, 1, 2
+
+PI = 3.141592653589793
+TWO_PI = 6.283185307179586
+HALF_PI = 1.5707963267948966
+#: IR rays (7.4): bearings from the plan, left positive, in the order ties are broken.
+RAY_ANGLES = np.array([0.0, PI / 8, -PI / 8, PI / 4, -PI / 4, 3 * PI / 8, -3 * PI / 8])
+N_RAYS = 7
+#: "No R guidance" (section 5): |v^R| <= 1e-12 for every beacon in range.
+NO_GUIDANCE2 = 1e-24
+
+# Summary columns (per run).
+(SM_RESOURCES, SM_TRIPS, SM_INTERRUPTIONS, SM_NEST_RECHARGES, SM_SESSIONS, SM_DEATHS, SM_BEACONS,
+ SM_MOBILE, SM_UNITS_BEACONS, SM_ALIGN, SM_ALIGN_W, SM_HEAD_ALIGN, SM_T_FIRST_T, SM_T_FIRST_R,
+ SM_T_FIRST_ROW5, SM_T_BEACONS_90, SM_ROWS) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 12, 15, 18, 19, 20, 21, 22)
+N_ROW_COUNTS = 12          # rows 1..11, then D (index 11)
+ROW_D = 12
+N_SUMMARY = SM_ROWS + N_ROW_COUNTS
+# Time-series columns (per record, every n_T ticks).
+(TS_K, TS_RESOURCES, TS_TRIPS, TS_INTERRUPTIONS, TS_NEST_RECHARGES, TS_SESSIONS, TS_RATE, TS_MOBILE,
+ TS_BEACONS, TS_DEAD, TS_UNSPAWNED, TS_F_OUT, TS_F_IN, TS_R, TS_SOC_SUM, TS_SOC_BEACONS, TS_SOC_MOBILE,
+ TS_SOC_MIN_BEACON, TS_UNITS_BEACONS, TS_ALIGN) = range(20)
+N_SERIES = TS_ALIGN + 3
+# Trip record columns.
+(TR_RUN, TR_ORIGIN, TR_DEST, TR_TICK_LEFT, TR_TICK_ENTERED, TR_LENGTH, TR_ENERGY, TR_SOFT,
+ TR_ROLE_LEFT, TR_ROLE_ENTERED, TR_ROBOT) = range(11)
+N_TRIP = 11
+# Snapshot columns and labels.
+(SN_RUN, SN_LABEL, SN_K, SN_ROBOT, SN_STATUS, SN_ROLE, SN_MODE, SN_X, SN_Y, SN_HEADING, SN_SOC,
+ SN_LOAD, SN_OMEGA, SN_VX, SN_VY, SN_S) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 18, 21)
+N_SNAP = 24
+LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL_FRAME = range(6)
+
+
+# ------------------------------------------------------------------ small rules (tested alone)
+
+
+@njit(cache=True, inline='always')
+def wrap(a):
+    """Angle ``a`` [rad] wrapped into [-pi, pi)."""
+    return a - TWO_PI * np.floor((a + PI) / TWO_PI)
+
+
+@njit(cache=True)
+def power(x, y):
+    """x ** y for x >= 0 with + - * / and fpmath: repeated squaring for integer 0 <= y <= 64,
+    else exp(y log x); 0 ** y = 0 for y > 0, x ** 0 = 1."""
+    if y == 0.0:
+        return 1.0
+    if x <= 0.0:
+        return 0.0
+    n = int(y)
+    if n == y and 0 < n <= 64:
+        result = 1.0
+        base = x
+        while n > 0:
+            if n & 1:
+                result *= base
+            base *= base
+            n >>= 1
+        return result
+    return exp(y * log(x))
+
+
+@njit(cache=True)
+def beacon_weight(omega, soc_cost, init, rho_f, rho_c, form):
+    """Weight w_b^X of a beacon's vector in Eq 5-14 (A12): ``omega`` its potential weight,
+    ``soc_cost`` S_b^X (read as 0 when not ``init``); form W_EXPONENT omega^rho_f (1 - S)^rho_c,
+    W_BRACKET omega max(0, 1 - rho_c S), W_LITERAL omega (1 - S)."""
+    s = soc_cost if init else 0.0
+    if form == W_EXPONENT:
+        return power(omega, rho_f) * power(1.0 - s, rho_c)
+    if form == W_BRACKET:
+        return omega * max(0.0, 1.0 - rho_c * s)
+    return omega * (1.0 - s)
+
+
+@njit(cache=True)
+def guidance(beacons, count, weight, vx, vy, key):
+    """G^X = sum over the ``count`` beacons ``beacons[:count]`` of w_b^X v_b^X (section 5), in
+    list order; ``weight``, ``vx``, ``vy`` (robots, 3) by beacon and key. Returns (Gx, Gy)."""
+    gx = 0.0
+    gy = 0.0
+    for q in range(count):
+        b = beacons[q]
+        w = weight[b, key]
+        gx += w * vx[b, key]
+        gy += w * vy[b, key]
+    return gx, gy
+
+
+@njit(cache=True)
+def follow_or_search(gx, gy, theta, u, o, eps):
+    """Heading decision (7.1) from the guidance (gx, gy), this tick's heading ``theta`` and the
+    decision's two draws u ~ U(0, 1), o ~ U(-pi, pi): (new planned heading, followed)."""
+    if (gx != 0.0 or gy != 0.0) and u >= eps:
+        return atan2(gy, gx), True
+    return wrap(theta + o), False
+
+
+@njit(cache=True)
+def beacon_update(omega, vx, vy, soc_cost, init, key, delta, mx, my, used, rho_w, rho_v, rho_p, phi_soc, eta_w):
+    """One beacon's window end (section 6, Alg 3): update its memory in place and say if it decays.
+
+    ``omega``, ``vx``, ``vy``, ``soc_cost`` (3,) float64 and ``init`` (3,) bool: the beacon's
+    memory by key. ``key`` (robots,) int64: the key s_c of the last message heard from each robot
+    in this window (-1: none); ``delta``, ``mx``, ``my``, ``used``: that message's Delta, reversed
+    velocity -v_m and used SOC u. Returns True when sum omega < eta_w after the update and no
+    message was heard at all (row D).
+    """
+    heard = False
+    for x in range(3):
+        count = 0
+        sd = 0.0
+        sx = 0.0
+        sy = 0.0
+        su = 0.0
+        for j in range(key.shape[0]):
+            if key[j] == x:
+                count += 1
+                sd += delta[j]
+                sx += mx[j]
+                sy += my[j]
+                su += used[j]
+        if count == 0:
+            omega[x] = (1.0 - rho_w) * omega[x]
+            continue
+        heard = True
+        omega[x] = (1.0 - rho_w) * omega[x] + rho_w * (sd / count)
+        vx[x] = (1.0 - rho_v) * vx[x] + rho_v * (sx / count)
+        vy[x] = (1.0 - rho_v) * vy[x] + rho_v * (sy / count)
+        if init[x]:
+            soc_cost[x] = min(1.0, (1.0 - rho_p) * soc_cost[x] + rho_p * phi_soc * (su / count))
+        else:
+            soc_cost[x] = min(1.0, phi_soc * (su / count))
+            init[x] = True
+    return (omega[0] + omega[1] + omega[2]) < eta_w and not heard
+
+
+@njit(cache=True)
+def avoidance_offset(hits, ray_length):
+    """theta_avoidance of 7.4 from the 7 rays' hit distances ``hits`` (RAY_ANGLES order; np.inf
+    where a ray hits nothing within ``ray_length``): (active, offset [rad]).
+
+    The nearest hit (first in ray order on a tie) at bearing beta != 0 gives -sign(beta)
+    (pi/2 - |beta|) (turn until it is abeam); straight ahead, +pi/2 when the left rays' summed
+    free length is at least the right rays', else -pi/2."""
+    nearest = -1
+    best = np.inf
+    for r in range(N_RAYS):
+        if hits[r] < best:
+            best = hits[r]
+            nearest = r
+    if nearest < 0:
+        return False, 0.0
+    beta = RAY_ANGLES[nearest]
+    if beta > 0.0:
+        return True, -(HALF_PI - beta)
+    if beta < 0.0:
+        return True, HALF_PI + beta
+    left = 0.0
+    right = 0.0
+    for r in range(1, N_RAYS):
+        free = min(hits[r], ray_length)
+        if RAY_ANGLES[r] > 0.0:
+            left += free
+        else:
+            right += free
+    return True, HALF_PI if left >= right else -HALF_PI
+
+
+@njit(cache=True)
+def power_out(p_comp, p_comm, links, mobile, p_scan, moved, p_move, kappa, avoiding, p_avoid):
+    """P_out of section 8 [W]: computation, links, scanning (mobile roles), locomotion (times
+    kappa where the centre before the move is in the soft obstacle) and avoidance."""
+    p = p_comp + p_comm * links
+    if mobile:
+        p += p_scan
+    if moved:
+        p += p_move * kappa
+    if avoiding:
+        p += p_avoid
+    return p
+
+
+@njit(cache=True)
+def energy_step(energy, e_cap, p_in, p_out, tau, exploit):
+    """E <- clip(E + (P_in - P_out) tau - exploit, 0, E_cap) [J] (section 8)."""
+    e = energy + (p_in - p_out) * tau - exploit
+    if e < 0.0:
+        return 0.0
+    if e > e_cap:
+        return e_cap
+    return e
+
+
+# ------------------------------------------------------------------ geometry
+
+
+@njit(cache=True, inline='always')
+def _cross(ax, ay, bx, by, cx, cy):
+    """z of (b - a) x (c - a): > 0 when c lies left of a -> b."""
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+
+
+@njit(cache=True)
+def inside_quad(px, py, g):
+    """The point lies strictly inside the counter-clockwise obstacle rectangle of geometry ``g``."""
+    c = G_CORNERS
+    for e in range(4):
+        f = (e + 1) % 4
+        if _cross(g[c + 2 * e], g[c + 2 * e + 1], g[c + 2 * f], g[c + 2 * f + 1], px, py) <= 0.0:
+            return False
+    return True
+
+
+@njit(cache=True)
+def segments_cross(ax, ay, bx, by, cx, cy, dx, dy):
+    """Segments a-b and c-d meet (touching counts)."""
+    d1 = _cross(cx, cy, dx, dy, ax, ay)
+    d2 = _cross(cx, cy, dx, dy, bx, by)
+    d3 = _cross(ax, ay, bx, by, cx, cy)
+    d4 = _cross(ax, ay, bx, by, dx, dy)
+    if ((d1 > 0.0 and d2 < 0.0) or (d1 < 0.0 and d2 > 0.0)) and ((d3 > 0.0 and d4 < 0.0) or (d3 < 0.0 and d4 > 0.0)):
+        return True
+    return (d1 == 0.0 or d2 == 0.0 or d3 == 0.0 or d4 == 0.0) and \
+        min(ax, bx) <= max(cx, dx) and min(cx, dx) <= max(ax, bx) and \
+        min(ay, by) <= max(cy, dy) and min(cy, dy) <= max(ay, by) and \
+        ((d1 == 0.0 and _on(cx, cy, dx, dy, ax, ay)) or (d2 == 0.0 and _on(cx, cy, dx, dy, bx, by)) or
+         (d3 == 0.0 and _on(ax, ay, bx, by, cx, cy)) or (d4 == 0.0 and _on(ax, ay, bx, by, dx, dy)))
+
+
+@njit(cache=True, inline='always')
+def _on(ax, ay, bx, by, px, py):
+    """p (collinear with a-b) lies within the segment's box."""
+    return min(ax, bx) <= px <= max(ax, bx) and min(ay, by) <= py <= max(ay, by)
+
+
+@njit(cache=True)
+def segment_blocked(ax, ay, bx, by, g):
+    """The segment a-b crosses the hard obstacle of ``g`` (line of sight, section 5)."""
+    c = G_CORNERS
+    for e in range(4):
+        f = (e + 1) % 4
+        if segments_cross(ax, ay, bx, by, g[c + 2 * e], g[c + 2 * e + 1], g[c + 2 * f], g[c + 2 * f + 1]):
+            return True
+    return inside_quad(ax, ay, g)
+
+
+@njit(cache=True)
+def segment_point_dist2(ax, ay, bx, by, px, py):
+    """Squared distance from p to the segment a-b."""
+    ux = bx - ax
+    uy = by - ay
+    ll = ux * ux + uy * uy
+    t = 0.0
+    if ll > 0.0:
+        t = ((px - ax) * ux + (py - ay) * uy) / ll
+        t = min(1.0, max(0.0, t))
+    dx = ax + t * ux - px
+    dy = ay + t * uy - py
+    return dx * dx + dy * dy
+
+
+@njit(cache=True)
+def disc_hits_quad(px, py, r, g):
+    """A disc of radius r at p overlaps the hard obstacle of ``g``."""
+    if inside_quad(px, py, g):
+        return True
+    c = G_CORNERS
+    r2 = r * r
+    for e in range(4):
+        f = (e + 1) % 4
+        if segment_point_dist2(g[c + 2 * e], g[c + 2 * e + 1], g[c + 2 * f], g[c + 2 * f + 1], px, py) < r2:
+            return True
+    return False
+
+
+@njit(cache=True)
+def ray_segment(px, py, dx, dy, ax, ay, bx, by):
+    """Distance t >= 0 along the ray p + t d (|d| = 1) to the segment a-b, np.inf if it misses."""
+    ex = bx - ax
+    ey = by - ay
+    den = dx * ey - dy * ex
+    if den == 0.0:
+        return np.inf
+    wx = ax - px
+    wy = ay - py
+    t = (wx * ey - wy * ex) / den
+    s = (wx * dy - wy * dx) / den
+    if t >= 0.0 and 0.0 <= s <= 1.0:
+        return t
+    return np.inf
+
+
+@njit(cache=True)
+def ray_disc(px, py, dx, dy, qx, qy, r):
+    """Distance t >= 0 along the ray p + t d (|d| = 1) to the disc of radius r at q, np.inf if it
+    misses (0 if p is inside it)."""
+    wx = qx - px
+    wy = qy - py
+    t = wx * dx + wy * dy
+    perp2 = wx * wx + wy * wy - t * t
+    r2 = r * r
+    if wx * wx + wy * wy <= r2:
+        return 0.0
+    if t < 0.0 or perp2 >= r2:
+        return np.inf
+    return t - np.sqrt(r2 - perp2)
+
+
+@njit(cache=True)
+def ray_walls(px, py, dx, dy, w, h):
+    """Distance along the ray p + t d to the field's walls."""
+    t = np.inf
+    if dx < 0.0:
+        t = min(t, -px / dx)
+    elif dx > 0.0:
+        t = min(t, (w - px) / dx)
+    if dy < 0.0:
+        t = min(t, -py / dy)
+    elif dy > 0.0:
+        t = min(t, (h - py) / dy)
+    return t
+
+
+@njit(cache=True)
+def region_of(px, py, g):
+    """Index of the region (T 0, N 1, R 2) whose disc holds p (centre distance < radius), or -1."""
+    for q in range(3):
+        dx = px - g[G_CX + q]
+        dy = py - g[G_CY + q]
+        if dx * dx + dy * dy < g[G_RAD + q] * g[G_RAD + q]:
+            return q
+    return NO_REGION
+
+
+@njit(cache=True)
+def near_box(px, py, reach, box):
+    """p is within ``reach`` of the box (xmin, ymin, xmax, ymax)."""
+    return box[0] - reach <= px <= box[2] + reach and box[1] - reach <= py <= box[3] + reach
+
+
+@njit(cache=True)
+def heading_alignment(px, py, dx, dy, g, key):
+    """cos of the angle between (dx, dy) and the direction from p to region ``key``; NaN if
+    either has length 0."""
+    ex = g[G_CX + key] - px
+    ey = g[G_CY + key] - py
+    n = np.sqrt((dx * dx + dy * dy) * (ex * ex + ey * ey))
+    if n == 0.0:
+        return np.nan
+    return (dx * ex + dy * ey) / n
+
+
+# ------------------------------------------------------------------ outputs
+
+
+@njit(cache=True)
+def _room(rows, used, more):
+    """``rows`` with room for ``more`` rows after ``used`` (doubled when full)."""
+    if used + more <= rows.shape[0]:
+        return rows
+    bigger = np.empty((max(2 * rows.shape[0], used + more), rows.shape[1]))
+    bigger[:used] = rows[:used]
+    return bigger
+
+
+@njit(cache=True)
+def _snapshot(snaps, used, run, label, k, n, status, role, mode, x, y, theta, energy, e_cap, load,
+              omega, bvx, bvy, bsoc):
+    """Append one network snapshot (a row per robot) to ``snaps``; returns (snaps, used)."""
+    snaps = _room(snaps, used, n)
+    for i in range(n):
+        row = snaps[used]
+        row[SN_RUN] = run
+        row[SN_LABEL] = label
+        row[SN_K] = k
+        row[SN_ROBOT] = i
+        row[SN_STATUS] = status[i]
+        row[SN_ROLE] = role[i]
+        row[SN_MODE] = mode[i]
+        row[SN_X] = x[i]
+        row[SN_Y] = y[i]
+        row[SN_HEADING] = theta[i]
+        row[SN_SOC] = energy[i] / e_cap
+        row[SN_LOAD] = load[i]
+        beacon = status[i] == ALIVE and role[i] == B
+        for q in range(3):
+            row[SN_OMEGA + q] = omega[i, q] if beacon else 0.0
+            row[SN_VX + q] = bvx[i, q] if beacon else 0.0
+            row[SN_VY + q] = bvy[i, q] if beacon else 0.0
+            row[SN_S + q] = bsoc[i, q] if beacon else 0.0
+        used += 1
+    return snaps, used
+
+
+@njit(cache=True)
+def _alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
+    """Guidance alignment per key (section 12) over alive beacons with |v^X| > 0 into
+    ``out[0:3]`` (mean cos) and ``weighted[0:3]`` (omega-weighted); NaN where none."""
+    for q in range(3):
+        total = 0.0
+        count = 0
+        wsum = 0.0
+        wtotal = 0.0
+        for i in range(n):
+            if status[i] != ALIVE or role[i] != B:
+                continue
+            vx = bvx[i, q]
+            vy = bvy[i, q]
+            if vx == 0.0 and vy == 0.0:
+                continue
+            c = heading_alignment(x[i], y[i], vx, vy, g, q)
+            if c != c:
+                continue
+            total += c
+            count += 1
+            wsum += omega[i, q] * c
+            wtotal += omega[i, q]
+        out[q] = total / count if count > 0 else np.nan
+        weighted[q] = wsum / wtotal if wtotal > 0.0 else np.nan
+
+
+# ------------------------------------------------------------------ the kernel
+
+
+@njit(cache=True, nogil=True)
+def run_runs(opts, pars, g, seeds, runs, table, stop):
+    """Every run of one configuration.
+
+    Parameters
+    ----------
+    opts : (N_OPTS,) int64, pars : (N_PARS,) float64
+        Options and parameters (O_* and P_* indices).
+    g : (22,) float64
+        Geometry (layout.kernel_geometry).
+    seeds, runs : (n_runs,) int64
+        Root seed and index of each run.
+    table : (1, states, 10) int64
+        The role supervisor's transition table over the EV_* columns.
+    stop : (1,) int8
+        Ctrl-C flag, checked every tick.
+
+    Returns
+    -------
+    summary (n_runs, N_SUMMARY), series (n_runs, K // n_T, N_SERIES), trips (rows, N_TRIP),
+    snapshots (rows, N_SNAP), all float64 (integers stored exactly).
+    """
+    n = opts[O_ROBOTS]
+    n_ticks = opts[O_TICKS]
+    n_t = opts[O_NT]
+    r_max = opts[O_RMAX]
+    blocked_limit = opts[O_BLOCKED]
+    rate_w = opts[O_RATE_W]
+    snap_every = opts[O_SNAP_EVERY]
+    frames = opts[O_FRAMES] != 0
+    avoid_turn = opts[O_AVOID_TURN] != 0
+    bcast_motion = opts[O_BCAST_MOTION] != 0
+    bcast_update = opts[O_BCAST_UPDATE] != 0
+    wform = opts[O_WFORM]
+    fallback_literal = opts[O_FALLBACK_LITERAL] != 0
+    turn_any = opts[O_TURN_ANY] != 0
+    los_bodies = opts[O_LOS_BODIES] != 0
+    redecide = opts[O_REDECIDE]
+    completion_last = opts[O_COMPLETION_LAST] != 0
+    init_state = opts[O_INIT_STATE]
+
+    tau = pars[P_TAU]
+    rho_w, rho_v, rho_p = pars[P_RHO_W], pars[P_RHO_V], pars[P_RHO_P]
+    rho_f, rho_c = pars[P_RHO_F], pars[P_RHO_C]
+    comm = pars[P_COMM_R]
+    comm2 = comm * comm
+    eta_w, phi_soc, v0, eps = pars[P_ETA_W], pars[P_PHI], pars[P_V0], pars[P_EPS]
+    reward, lam, kappa_soft = pars[P_REWARD], pars[P_LAMBDA], pars[P_KAPPA]
+    e_cap = pars[P_ECAP]
+    soc0 = pars[P_SOC0]
+    p_move, p_comp, p_comm, p_scan = pars[P_MOVE], pars[P_COMP], pars[P_COMM], pars[P_SCAN]
+    p_avoid, e_exploit, p_solar = pars[P_AVOID], pars[P_EXPLOIT], pars[P_SOLAR]
+    r_body = pars[P_RBODY]
+    ray_len = r_body + pars[P_IR]
+    step = v0 * tau
+    d_rc = 2.0 * comm
+    margin = 2.0 * step + 1e-9          # how far two robots can close in on each other within a tick
+    ray_reach2 = (ray_len + r_body + margin) ** 2
+    touch2 = (2.0 * r_body) ** 2
+    touch_reach2 = (2.0 * r_body + margin) ** 2
+    field_w, field_h = g[G_W], g[G_H]
+    kind = int(g[G_KIND])
+    hard = kind == KIND_HARD
+    soft = kind == KIND_SOFT
+    box = np.empty(4)
+    if kind != KIND_NONE:
+        box[0] = min(g[G_CORNERS + 0], g[G_CORNERS + 2], g[G_CORNERS + 4], g[G_CORNERS + 6])
+        box[1] = min(g[G_CORNERS + 1], g[G_CORNERS + 3], g[G_CORNERS + 5], g[G_CORNERS + 7])
+        box[2] = max(g[G_CORNERS + 0], g[G_CORNERS + 2], g[G_CORNERS + 4], g[G_CORNERS + 6])
+        box[3] = max(g[G_CORNERS + 1], g[G_CORNERS + 3], g[G_CORNERS + 5], g[G_CORNERS + 7])
+    spawn_x, spawn_y = g[G_SPAWN], g[G_SPAWN + 1]
+    ray_c = np.empty(N_RAYS)
+    ray_s = np.empty(N_RAYS)
+    for r in range(N_RAYS):
+        ray_s[r], ray_c[r] = sincos(RAY_ANGLES[r])
+
+    n_runs = seeds.shape[0]
+    n_rec = n_ticks // n_t
+    summary = np.full((n_runs, N_SUMMARY), np.nan)
+    series = np.full((n_runs, n_rec, N_SERIES), np.nan)
+    trips = np.empty((256, N_TRIP))
+    n_trips = 0
+    snaps = np.empty((max(1, n) * 16, N_SNAP))
+    n_snaps = 0
+
+    rng = np.empty((1, n, 4), dtype=np.uint64)
+    sup = np.zeros((n, 1), dtype=np.int64)
+    status = np.zeros(n, dtype=np.int64)
+    role = np.zeros(n, dtype=np.int64)
+    mode = np.zeros(n, dtype=np.int64)
+    s_prev = np.zeros(n, dtype=np.int64)
+    role_k1 = np.zeros(n, dtype=np.int64)
+    role_k2 = np.zeros(n, dtype=np.int64)
+    x = np.zeros(n)
+    y = np.zeros(n)
+    theta_a = np.zeros(n)
+    pcx = np.ones(n)          # plan direction (cos, sin) of theta_a
+    pcy = np.zeros(n)
+    theta = np.zeros(n)
+    mdx = np.ones(n)          # motion direction of the last tick
+    mdy = np.zeros(n)
+    blocked = np.zeros(n, dtype=np.int64)
+    avoiding = np.zeros(n, dtype=np.bool_)
+    was_avoiding = np.zeros(n, dtype=np.bool_)
+    energy = np.zeros(n)
+    load = np.zeros(n, dtype=np.int64)
+    s_c = np.zeros(n, dtype=np.int64)
+    soc_ref = np.zeros(n)
+    visited_r = np.zeros(n, dtype=np.bool_)
+    n_failed = np.zeros(n, dtype=np.int64)
+    bt_budget = np.zeros(n)
+    bt_travel = np.zeros(n)
+    rc_travel = np.zeros(n)
+    countdown = np.zeros(n, dtype=np.int64)
+    immediate = np.zeros(n, dtype=np.bool_)
+    decided = np.zeros(n, dtype=np.bool_)
+    nearest = np.zeros(n, dtype=np.int64)
+    beacon_since = np.zeros(n, dtype=np.int64)
+    reg = np.zeros(n, dtype=np.int64)
+    last_left = np.zeros(n, dtype=np.int64)
+    tick_left = np.zeros(n, dtype=np.int64)
+    role_left = np.zeros(n, dtype=np.int64)
+    acc_len = np.zeros(n)
+    acc_energy = np.zeros(n)
+    acc_soft = np.zeros(n)
+    moved = np.zeros(n, dtype=np.bool_)
+    kappa = np.ones(n)
+    loaded_now = np.zeros(n, dtype=np.bool_)
+    links = np.zeros(n, dtype=np.int64)
+    omega = np.zeros((n, 3))
+    bvx = np.zeros((n, 3))
+    bvy = np.zeros((n, 3))
+    bsoc = np.zeros((n, 3))
+    binit = np.zeros((n, 3), dtype=np.bool_)
+    weight = np.zeros((n, 3))
+    ikey = np.full((n, n), -1, dtype=np.int64)
+    idelta = np.zeros((n, n))
+    ivx = np.zeros((n, n))
+    ivy = np.zeros((n, n))
+    iu = np.zeros((n, n))
+    d2 = np.zeros((n, n))
+    nb_cnt = np.zeros(n, dtype=np.int64)
+    nb_list = np.zeros((n, n), dtype=np.int64)
+    mb_cnt = np.zeros(n, dtype=np.int64)
+    beacons = np.zeros(n, dtype=np.int64)
+    s_hat = np.zeros((n, 3))
+    no_r_guidance = np.zeros(n, dtype=np.bool_)
+    hits = np.empty(N_RAYS)
+    f_hist = np.zeros(n_ticks + 1, dtype=np.int64)
+    nb_hist = np.zeros(n_ticks + 1, dtype=np.int64)
+    row_counts = np.zeros(ROW_D, dtype=np.int64)
+    align = np.empty(3)
+    align_w = np.empty(3)
+
+    for run in range(n_runs):
+        if stop[0] != 0:
+            break
+        for i in range(n):
+            seed_stream(rng, 0, i, seeds[run], i)
+        status[:] = UNSPAWNED
+        sup[:, 0] = init_state
+        role[:] = R
+        role_k1[:] = R
+        role_k2[:] = R
+        mode[:] = NORMAL
+        x[:] = spawn_x
+        y[:] = spawn_y
+        theta_a[:] = 0.0
+        theta[:] = 0.0
+        pcx[:] = 1.0
+        pcy[:] = 0.0
+        mdx[:] = 1.0
+        mdy[:] = 0.0
+        blocked[:] = 0
+        avoiding[:] = False
+        energy[:] = soc0 * e_cap
+        load[:] = 0
+        s_c[:] = F_IN
+        soc_ref[:] = soc0
+        visited_r[:] = False
+        n_failed[:] = 0
+        countdown[:] = 0
+        immediate[:] = False
+        decided[:] = False
+        nearest[:] = -1
+        reg[:] = REG_N
+        last_left[:] = NO_REGION
+        acc_len[:] = 0.0
+        acc_energy[:] = 0.0
+        acc_soft[:] = 0.0
+        omega[:] = 0.0
+        bvx[:] = 0.0
+        bvy[:] = 0.0
+        bsoc[:] = 0.0
+        binit[:] = False
+        weight[:] = 0.0
+        ikey[:] = -1
+        row_counts[:] = 0
+        f_hist[:] = 0
+        nb_hist[:] = 0
+        spawned = 0
+        resources = 0
+        unloads = 0
+        deaths = 0
+        t_first = np.full(3, -1, dtype=np.int64)      # first entry into T, R; first row 5 [tick]
+        run_id = runs[run]
+
+        for k in range(1, n_ticks + 1):
+            if stop[0] != 0:
+                break
+            milestone = -1
+            # 1. spawn (A33)
+            if spawned < n:
+                clear = True
+                for j in range(spawned):
+                    dx = x[j] - spawn_x
+                    dy = y[j] - spawn_y
+                    if dx * dx + dy * dy < touch2:
+                        clear = False
+                        break
+                if clear:
+                    i = spawned
+                    spawned += 1
+                    status[i] = ALIVE
+                    energy[i] = soc0 * e_cap
+
+            # 2. snapshot of the end of tick k-1: distances, links, beacon inboxes (section 5)
+            for i in range(spawned):
+                xi = x[i]
+                yi = y[i]
+                for j in range(spawned):
+                    dx = x[j] - xi
+                    dy = y[j] - yi
+                    d2[i, j] = dx * dx + dy * dy
+            n_beacons = 0
+            for i in range(spawned):
+                nb_cnt[i] = 0
+                mb_cnt[i] = 0
+                if status[i] == ALIVE and role[i] == B:
+                    beacons[n_beacons] = i
+                    n_beacons += 1
+            for i in range(spawned):
+                if status[i] != ALIVE or role[i] == B:
+                    continue
+                for q in range(n_beacons):
+                    b = beacons[q]
+                    if d2[i, b] >= comm2:
+                        continue
+                    if hard and min(x[i], x[b]) <= box[2] and max(x[i], x[b]) >= box[0] and \
+                            min(y[i], y[b]) <= box[3] and max(y[i], y[b]) >= box[1] and \
+                            segment_blocked(x[i], y[i], x[b], y[b], g):
+                        continue
+                    if los_bodies:
+                        occluded = False
+                        for o in range(spawned):
+                            if o != i and o != b and status[o] != UNSPAWNED and \
+                                    segment_point_dist2(x[i], y[i], x[b], y[b], x[o], y[o]) < r_body * r_body:
+                                occluded = True
+                                break
+                        if occluded:
+                            continue
+                    nb_list[i, nb_cnt[i]] = b
+                    nb_cnt[i] += 1
+                    mb_cnt[b] += 1
+            for i in range(spawned):
+                if status[i] != ALIVE:
+                    continue
+                if role[i] == B:
+                    links[i] = mb_cnt[i]
+                    continue
+                links[i] = nb_cnt[i]
+                best_omega = 0.0
+                no_r = True
+                near = -1
+                for x_key in range(3):
+                    s_hat[i, x_key] = 0.0
+                for q in range(nb_cnt[i]):
+                    b = nb_list[i, q]
+                    best_omega = max(best_omega, omega[b, s_c[i]])
+                    for x_key in range(3):
+                        if binit[b, x_key] and bsoc[b, x_key] > s_hat[i, x_key]:
+                            s_hat[i, x_key] = bsoc[b, x_key]
+                    if bvx[b, R] * bvx[b, R] + bvy[b, R] * bvy[b, R] > NO_GUIDANCE2:
+                        no_r = False
+                    if near < 0 or d2[i, b] < d2[i, near]:
+                        near = b
+                no_r_guidance[i] = no_r
+                if redecide == REDECIDE_BEACON_CHANGE and near != nearest[i]:
+                    immediate[i] = True
+                nearest[i] = near
+                if nb_cnt[i] == 0 or (bcast_update and not decided[i]):
+                    continue
+                # the broadcast (s_c, Delta, -v_m, u) heard by every beacon in range
+                gamma = reward if reg[i] == s_c[i] else 0.0
+                delta = gamma + lam * best_omega
+                if mode[i] == CHARGING:
+                    mvx = 0.0
+                    mvy = 0.0
+                elif bcast_motion:
+                    mvx = -v0 * mdx[i]
+                    mvy = -v0 * mdy[i]
+                else:
+                    mvx = -v0 * pcx[i]
+                    mvy = -v0 * pcy[i]
+                used = max(0.0, soc_ref[i] - energy[i] / e_cap)
+                for q in range(nb_cnt[i]):
+                    b = nb_list[i, q]
+                    ikey[b, i] = s_c[i]
+                    idelta[b, i] = delta
+                    ivx[b, i] = mvx
+                    ivy[b, i] = mvy
+                    iu[b, i] = used
+            decided[:spawned] = False
+
+            # 3. region actions, completion, role transitions (rows 1-11), loads (sections 9, 10)
+            for i in range(spawned):
+                loaded_now[i] = False
+                if status[i] != ALIVE or role[i] == B:
+                    continue
+                r0 = role[i]
+                rg = reg[i]
+                if rg == REG_N and load[i] > 0 and take(table, sup, i, EV_UNLOAD):
+                    resources += load[i]
+                    unloads += 1
+                    load[i] = 0
+                if completion_last:
+                    if rg != NO_REGION:
+                        s_c[i] = rg
+                        n_failed[i] = 0
+                elif rg == r0:                     # F_OUT in T, F_IN in N, R in R
+                    s_c[i] = r0
+                    n_failed[i] = 0
+                soc = energy[i] / e_cap
+                charging = mode[i] == CHARGING
+                row = 0
+                if nb_cnt[i] == 0 and role_k1[i] != B and role_k2[i] != B and rg != REG_N and \
+                        mode[i] != RECONNECT:
+                    row = 1
+                elif r0 != R and (soc < s_hat[i, r0] or soc < s_hat[i, R]):
+                    row = 2
+                elif rg == REG_N and not visited_r[i]:
+                    row = 3
+                elif r0 == R and not charging and rg == REG_R:
+                    row = 4
+                elif charging and energy[i] == e_cap:
+                    row = 5 if no_r_guidance[i] else (6 if load[i] == 0 else 7)
+                elif r0 == F_IN and rg == REG_N:
+                    row = 8
+                elif r0 == R and not charging and rg == REG_N and soc > s_hat[i, F_OUT] and soc > s_hat[i, R]:
+                    row = 9
+                elif r0 == F_OUT and rg == REG_T:
+                    row = 10
+                elif r0 == R and not charging and rg == REG_T and soc > s_hat[i, F_IN] and soc > s_hat[i, R]:
+                    row = 11
+                if row == 0 or (row == 3 and r0 == R):
+                    continue                       # row 3 in role R: already going to charge
+                turn = row >= 3 or turn_any
+                if row == 1:
+                    if not take(table, sup, i, EV_BECOME_BEACON):
+                        continue
+                    s_prev[i] = r0
+                    role[i] = B
+                    mode[i] = NORMAL
+                    countdown[i] = n_t
+                    beacon_since[i] = k
+                    last_left[i] = NO_REGION       # a beacon spell voids the trip in progress
+                    avoiding[i] = False
+                    blocked[i] = 0
+                    for q in range(3):
+                        omega[i, q] = 0.0
+                        bvx[i, q] = 0.0
+                        bvy[i, q] = 0.0
+                        bsoc[i, q] = 0.0
+                        binit[i, q] = False
+                        weight[i, q] = 0.0
+                    ikey[i, :] = -1
+                    turn = False
+                elif row == 2 or row == 3:
+                    if not take(table, sup, i, EV_GO_CHARGE):
+                        continue
+                    role[i] = R
+                elif row == 4:
+                    if not take(table, sup, i, EV_CHARGE):
+                        continue
+                    mode[i] = CHARGING
+                    turn = False
+                elif row == 6 or row == 8 or row == 9:
+                    if not take(table, sup, i, EV_GO_OUT):
+                        continue
+                    role[i] = F_OUT
+                else:                              # rows 5, 7, 10, 11
+                    if not take(table, sup, i, EV_GO_IN):
+                        continue
+                    role[i] = F_IN
+                if row >= 5 and row <= 7:
+                    mode[i] = NORMAL
+                    if row == 5 and t_first[2] < 0:
+                        t_first[2] = k
+                        milestone = LABEL_FIRST_ROW5
+                if row == 9:
+                    s_c[i] = F_IN
+                    n_failed[i] = 0
+                elif row == 11:
+                    s_c[i] = F_OUT
+                    n_failed[i] = 0
+                if (row == 10 or row == 11) and take(table, sup, i, EV_LOAD):
+                    load[i] = r_max
+                    loaded_now[i] = True
+                if turn and take(table, sup, i, EV_TURN_AROUND):
+                    theta_a[i] = wrap(theta[i] + PI)
+                    theta[i] = theta_a[i]
+                    pcy[i], pcx[i] = sincos(theta_a[i])
+                row_counts[row - 1] += 1
+
+            # 4. heading decisions (7.1, 7.3), countdowns, reconnect contact
+            for i in range(spawned):
+                if status[i] != ALIVE or role[i] == B:
+                    continue
+                if mode[i] == RECONNECT and nb_cnt[i] > 0:
+                    mode[i] = BACKTRACK
+                    bt_budget[i] = n_failed[i] * 0.5 * comm
+                    bt_travel[i] = 0.0
+                    immediate[i] = True
+                due = countdown[i] <= 0
+                if due:
+                    countdown[i] = n_t
+                countdown[i] -= 1
+                if not (due or immediate[i]):
+                    continue
+                immediate[i] = False
+                if mode[i] == BACKTRACK:
+                    gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, s_c[i])
+                    if gx == 0.0 and gy == 0.0:
+                        mode[i] = NORMAL
+                elif mode[i] != NORMAL:
+                    continue
+                if mode[i] == NORMAL:
+                    key = role[i]
+                    gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, key)
+                    if gx == 0.0 and gy == 0.0:
+                        if key == F_IN:
+                            gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, R)
+                        elif key == R and (visited_r[i] or fallback_literal):
+                            gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, F_IN)
+                u = uniform(rng, 0, i)
+                o = (2.0 * uniform(rng, 0, i) - 1.0) * PI
+                theta_a[i] = follow_or_search(gx, gy, theta[i], u, o, eps)[0]
+                theta[i] = theta_a[i]
+                pcy[i], pcx[i] = sincos(theta_a[i])
+                decided[i] = True
+
+            # 5. avoidance (7.4) and translation (7.5) in ascending id
+            for i in range(spawned):
+                moved[i] = False
+                was_avoiding[i] = avoiding[i]
+                avoiding[i] = False
+                if status[i] != ALIVE or role[i] == B or mode[i] == CHARGING:
+                    continue
+                xi = x[i]
+                yi = y[i]
+                theta[i] = theta_a[i]
+                cx = pcx[i]
+                cy = pcy[i]
+                any_hit = False
+                near_wall = xi < ray_len or yi < ray_len or xi > field_w - ray_len or yi > field_h - ray_len
+                near_obstacle = hard and near_box(xi, yi, ray_len, box)
+                for r in range(N_RAYS):
+                    hits[r] = np.inf
+                    rdx = cx * ray_c[r] - cy * ray_s[r]
+                    rdy = cy * ray_c[r] + cx * ray_s[r]
+                    best = np.inf
+                    if near_wall:
+                        best = min(best, ray_walls(xi, yi, rdx, rdy, field_w, field_h))
+                    if near_obstacle:
+                        c = G_CORNERS
+                        for e in range(4):
+                            f = (e + 1) % 4
+                            best = min(best, ray_segment(xi, yi, rdx, rdy, g[c + 2 * e], g[c + 2 * e + 1],
+                                                         g[c + 2 * f], g[c + 2 * f + 1]))
+                    for j in range(spawned):
+                        if j != i and status[j] != UNSPAWNED and d2[i, j] < ray_reach2:
+                            best = min(best, ray_disc(xi, yi, rdx, rdy, x[j], y[j], r_body))
+                    if best <= ray_len:
+                        hits[r] = best
+                        any_hit = True
+                if any_hit:
+                    active, offset = avoidance_offset(hits, ray_len)
+                    avoiding[i] = active
+                    theta[i] = wrap(theta_a[i] + offset)
+                    cy, cx = sincos(theta[i])
+                    if avoid_turn:
+                        theta_a[i] = theta[i]
+                        pcx[i] = cx
+                        pcy[i] = cy
+                elif redecide == REDECIDE_AVOID_CLEAR and was_avoiding[i]:
+                    immediate[i] = True
+                mdx[i] = cx
+                mdy[i] = cy
+                nx = xi + step * cx
+                ny = yi + step * cy
+                ok = r_body <= nx <= field_w - r_body and r_body <= ny <= field_h - r_body
+                if ok and hard and near_box(nx, ny, r_body, box):
+                    ok = not disc_hits_quad(nx, ny, r_body, g)
+                if ok:
+                    for j in range(spawned):
+                        if j != i and status[j] != UNSPAWNED and d2[i, j] < touch_reach2:
+                            dx = nx - x[j]
+                            dy = ny - y[j]
+                            if dx * dx + dy * dy < touch2:
+                                ok = False
+                                break
+                if ok:
+                    kappa[i] = 1.0
+                    if soft and inside_quad(xi, yi, g):
+                        kappa[i] = kappa_soft
+                        acc_soft[i] += step
+                    x[i] = nx
+                    y[i] = ny
+                    moved[i] = True
+                    blocked[i] = 0
+                    acc_len[i] += step
+                    if mode[i] == RECONNECT:
+                        rc_travel[i] += step
+                        if rc_travel[i] >= d_rc:
+                            mode[i] = NORMAL
+                            immediate[i] = True
+                    elif mode[i] == BACKTRACK:
+                        bt_travel[i] += step
+                        if bt_travel[i] >= bt_budget[i]:
+                            mode[i] = NORMAL
+                            immediate[i] = True
+                else:
+                    blocked[i] += 1
+                    if blocked[i] >= blocked_limit:
+                        theta_a[i] = wrap(theta[i] + (2.0 * uniform(rng, 0, i) - 1.0) * PI)
+                        theta[i] = theta_a[i]
+                        pcy[i], pcx[i] = sincos(theta_a[i])
+                        blocked[i] = 0
+
+            # 6. energy (section 8), deaths (row X); 7. bookkeeping, trip records (sections 10, 12)
+            for i in range(spawned):
+                if status[i] != ALIVE:
+                    continue
+                mobile = role[i] != B
+                p_out = power_out(p_comp, p_comm, links[i], mobile, p_scan, moved[i], p_move, kappa[i],
+                                  avoiding[i], p_avoid)
+                newreg = region_of(x[i], y[i], g)
+                p_in = p_solar if newreg == REG_R else 0.0
+                exploit = e_exploit if loaded_now[i] else 0.0
+                energy[i] = energy_step(energy[i], e_cap, p_in, p_out, tau, exploit)
+                acc_energy[i] += p_out * tau + exploit
+                if energy[i] == 0.0:
+                    if take(table, sup, i, EV_DEPLETED):
+                        status[i] = DEAD
+                        deaths += 1
+                        continue
+                if mobile and newreg == s_c[i]:
+                    soc_ref[i] = energy[i] / e_cap
+                if newreg == REG_R:
+                    visited_r[i] = True
+                old = reg[i]
+                if old != newreg:
+                    if old != NO_REGION:
+                        last_left[i] = old
+                        tick_left[i] = k
+                        role_left[i] = role[i]
+                        acc_len[i] = 0.0
+                        acc_energy[i] = 0.0
+                        acc_soft[i] = 0.0
+                    if newreg != NO_REGION:
+                        if last_left[i] != NO_REGION and last_left[i] != newreg:
+                            trips = _room(trips, n_trips, 1)
+                            row_t = trips[n_trips]
+                            row_t[TR_RUN] = run_id
+                            row_t[TR_ORIGIN] = last_left[i]
+                            row_t[TR_DEST] = newreg
+                            row_t[TR_TICK_LEFT] = tick_left[i]
+                            row_t[TR_TICK_ENTERED] = k
+                            row_t[TR_LENGTH] = acc_len[i]
+                            row_t[TR_ENERGY] = acc_energy[i]
+                            row_t[TR_SOFT] = acc_soft[i]
+                            row_t[TR_ROLE_LEFT] = role_left[i]
+                            row_t[TR_ROLE_ENTERED] = role[i]
+                            row_t[TR_ROBOT] = i
+                            n_trips += 1
+                        last_left[i] = NO_REGION
+                        if newreg == REG_T and t_first[0] < 0:
+                            t_first[0] = k
+                            milestone = LABEL_FIRST_T
+                        elif newreg == REG_R and t_first[1] < 0:
+                            t_first[1] = k
+                            milestone = LABEL_FIRST_R
+                    reg[i] = newreg
+
+            # 8. beacon windows (section 6), decay and revert (row D, 7.3)
+            for i in range(spawned):
+                if status[i] != ALIVE or role[i] != B or beacon_since[i] == k:
+                    continue
+                countdown[i] -= 1
+                if countdown[i] > 0:
+                    continue
+                countdown[i] = n_t
+                decays = beacon_update(omega[i], bvx[i], bvy[i], bsoc[i], binit[i], ikey[i], idelta[i],
+                                       ivx[i], ivy[i], iu[i], rho_w, rho_v, rho_p, phi_soc, eta_w)
+                ikey[i, :] = -1
+                for q in range(3):
+                    weight[i, q] = beacon_weight(omega[i, q], bsoc[i, q], binit[i, q], rho_f, rho_c, wform)
+                if decays and take(table, sup, i, EV_REVERT):
+                    role[i] = s_prev[i]
+                    mode[i] = RECONNECT
+                    n_failed[i] += 1
+                    rc_travel[i] = 0.0
+                    for q in range(3):
+                        omega[i, q] = 0.0
+                        bvx[i, q] = 0.0
+                        bvy[i, q] = 0.0
+                        bsoc[i, q] = 0.0
+                        binit[i, q] = False
+                        weight[i, q] = 0.0
+                    if take(table, sup, i, EV_TURN_AROUND):
+                        theta_a[i] = wrap(theta[i] + PI)
+                        theta[i] = theta_a[i]
+                        pcy[i], pcx[i] = sincos(theta_a[i])
+                    row_counts[ROW_D - 1] += 1
+
+            # 9. records
+            n_b = 0
+            for i in range(spawned):
+                role_k2[i] = role_k1[i]
+                role_k1[i] = role[i]
+                if status[i] == ALIVE and role[i] == B:
+                    n_b += 1
+            f_hist[k] = resources
+            nb_hist[k] = n_b
+            if k % n_t == 0 and k // n_t <= n_rec:
+                rec = series[run, k // n_t - 1]
+                rec[TS_K] = k
+                rec[TS_RESOURCES] = resources
+                rec[TS_TRIPS] = unloads
+                rec[TS_INTERRUPTIONS] = row_counts[1]
+                rec[TS_NEST_RECHARGES] = row_counts[2]
+                rec[TS_SESSIONS] = row_counts[3]
+                rec[TS_RATE] = resources - (f_hist[k - rate_w] if k >= rate_w else 0)
+                counts = np.zeros(8, dtype=np.int64)
+                soc_sum = 0.0
+                soc_b = 0.0
+                soc_m = 0.0
+                soc_min = np.inf
+                units_b = 0
+                for i in range(n):
+                    soc = energy[i] / e_cap
+                    if status[i] == UNSPAWNED:
+                        counts[3] += 1
+                        soc_sum += soc0
+                        continue
+                    soc_sum += soc
+                    if status[i] == DEAD:
+                        counts[2] += 1
+                    elif role[i] == B:
+                        counts[1] += 1
+                        soc_b += soc
+                        soc_min = min(soc_min, soc)
+                        units_b += load[i]
+                    else:
+                        counts[0] += 1
+                        counts[4 + role[i]] += 1
+                        soc_m += soc
+                rec[TS_MOBILE] = counts[0]
+                rec[TS_BEACONS] = counts[1]
+                rec[TS_DEAD] = counts[2]
+                rec[TS_UNSPAWNED] = counts[3]
+                rec[TS_F_OUT] = counts[4 + F_OUT]
+                rec[TS_F_IN] = counts[4 + F_IN]
+                rec[TS_R] = counts[4 + R]
+                rec[TS_SOC_SUM] = soc_sum
+                rec[TS_SOC_BEACONS] = soc_b
+                rec[TS_SOC_MOBILE] = soc_m
+                rec[TS_SOC_MIN_BEACON] = soc_min if counts[1] > 0 else np.nan
+                rec[TS_UNITS_BEACONS] = units_b
+                _alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
+                for q in range(3):
+                    rec[TS_ALIGN + q] = align[q]
+            if milestone >= 0:
+                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, milestone, k, n, status, role, mode, x, y,
+                                           theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+            if k % snap_every == 0:
+                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
+                                           y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+            if frames and k % n_t == 0:
+                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_FRAME, k, n, status, role, mode, x,
+                                           y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+            if k == n_ticks:
+                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_END, k, n, status, role, mode, x,
+                                           y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+
+        # per-run summary
+        sm = summary[run]
+        sm[SM_RESOURCES] = resources
+        sm[SM_TRIPS] = unloads
+        sm[SM_INTERRUPTIONS] = row_counts[1]
+        sm[SM_NEST_RECHARGES] = row_counts[2]
+        sm[SM_SESSIONS] = row_counts[3]
+        sm[SM_DEATHS] = deaths
+        n_b = 0
+        n_m = 0
+        units_b = 0
+        for i in range(n):
+            if status[i] == ALIVE:
+                if role[i] == B:
+                    n_b += 1
+                    units_b += load[i]
+                else:
+                    n_m += 1
+        sm[SM_BEACONS] = n_b
+        sm[SM_MOBILE] = n_m
+        sm[SM_UNITS_BEACONS] = units_b
+        _alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
+        for q in range(3):
+            sm[SM_ALIGN + q] = align[q]
+            sm[SM_ALIGN_W + q] = align_w[q]
+            total = 0.0
+            count = 0
+            for i in range(n):
+                if status[i] == ALIVE and role[i] == q and mode[i] == NORMAL:
+                    c = heading_alignment(x[i], y[i], mdx[i], mdy[i], g, q)
+                    if c == c:
+                        total += c
+                        count += 1
+            sm[SM_HEAD_ALIGN + q] = total / count if count > 0 else np.nan
+        for q in range(3):
+            sm[SM_T_FIRST_T + q] = t_first[q] * tau if t_first[q] >= 0 else np.nan
+        peak = 0
+        for k in range(n_ticks + 1):
+            peak = max(peak, nb_hist[k])
+        if peak > 0:
+            for k in range(n_ticks + 1):
+                if nb_hist[k] >= 0.9 * peak:
+                    sm[SM_T_BEACONS_90] = k * tau
+                    break
+        for r in range(ROW_D):
+            sm[SM_ROWS + r] = row_counts[r]
+    return summary, series, trips[:n_trips].copy(), snaps[:n_snaps].copy()

@@ -325,3 +325,13 @@ def test_every_shipped_lunar_file_is_listed(capsys):
     listed = capsys.readouterr().out
     for name in ("lunar ", "lunar-e1 ", "lunar-e2 ", "lunar-e3 ", "lunar-e4 ", "lunar-eps1 "):
         assert f"\n  {name}" in listed, name
+
+
+def test_the_guide_lists_every_key_and_every_option_word():
+    guide = (ROOT / "docs" / "guide" / "lunar.md").read_text()
+    for name, key in lunar.KEYS.items():
+        assert f"| `{name}` | {key.section} |" in guide, name
+    for name, words in OPTIONS.items():
+        assert all(f'"{word}"' in guide for word in words), name
+    for limit in ("A42", "A43", "A44"):
+        assert f"**{limit}," in guide

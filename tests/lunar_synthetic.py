@@ -163,21 +163,3 @@ def module():
     fake.simulate = simulate
     return fake
 
-
-def layout_module():
-    """A stand-in for ``dronefleet.lunar.layout`` while the kernel's is not there (section 2's numbers)."""
-    def build(params):
-        s = params.layout_scale / 0.75
-        corners = {"RT": [(6.75, 4.95), (10.35, 4.95), (10.35, 5.85), (6.75, 5.85)],
-                   "NT": [(4.9976, 8.7862), (4.1925, 8.3837), (5.8025, 5.1638), (6.6075, 5.5663)],
-                   "NR": [(4.9976, 2.0138), (4.1925, 2.4163), (5.8025, 5.6362), (6.6075, 5.2337)]}
-        kind, _, where = params.layout.partition("-")
-        return types.SimpleNamespace(
-            field=(12.6 * s, 10.8 * s), centres={"N": (2.25 * s, 5.4 * s), "T": (8.55 * s, 8.55 * s),
-                                                 "R": (8.55 * s, 2.25 * s)},
-            radii={"N": 1.5, "T": 1.5, "R": 1.5}, spawn=(2.25 * s, 5.4 * s),
-            obstacle=None if kind == "OPEN" else np.array(corners[where]) * s,
-            obstacle_kind=None if kind == "OPEN" else kind.lower())
-    fake = types.ModuleType("dronefleet.lunar.layout")
-    fake.build = build
-    return fake

@@ -34,10 +34,6 @@ def fake_simulator(monkeypatch):
     fake = types.ModuleType("dronefleet.lunar.simulate")
     fake.simulate = synthetic.simulate
     monkeypatch.setitem(sys.modules, "dronefleet.lunar.simulate", fake)
-    try:
-        import dronefleet.lunar.layout  # noqa: F401
-    except ImportError:
-        monkeypatch.setitem(sys.modules, "dronefleet.lunar.layout", synthetic.layout_module())
     monkeypatch.setattr(experiments, "grid_path", lambda experiment: Path(f"lunar-{experiment}.toml"))
     return fake
 
@@ -281,3 +277,11 @@ def test_reproduce_lists_the_lunar_figures():
     assert "lunar: " in listing
     assert " ".join(study.FIGURES) in listing
     assert reproduce.owner("lunar-fig07") is study
+
+
+def test_the_synthetic_tables_have_the_simulators_columns_and_types():
+    from dronefleet.lunar.simulate import table_schemas
+
+    tables = synthetic.simulate(LunarParams(runs=2, duration_s=60.0, frames=True))
+    for name, schema in table_schemas().items():
+        assert tables[name].schema.equals(schema), name

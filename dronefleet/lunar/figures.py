@@ -22,7 +22,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..figstyle import DOUBLE_COLUMN, OKABE_ITO, PRINT_RC, Style, _figure, figure_paths, letter_panels, styles
+from ..figstyle import DOUBLE_COLUMN, MIN_FONT_SIZE, OKABE_ITO, PRINT_RC, Style, _dodge, _figure, figure_paths, \
+    letter_panels, styles
 
 if TYPE_CHECKING:
     import pandas
@@ -73,7 +74,7 @@ def _field(ax, geometry: Any) -> None:
                 zorder=0)
     if geometry.obstacle is not None:
         corners = np.asarray(geometry.obstacle, dtype=float)
-        if geometry.obstacle_kind == "hard":
+        if geometry.kind == "hard":
             ax.add_patch(Polygon(corners, closed=True, fc="0.35", ec="black", lw=0.8, zorder=1))
         else:
             ax.add_patch(Polygon(corners, closed=True, fc="#e8dcc4", ec="0.3", lw=0.8, ls="--", hatch="....",
@@ -135,7 +136,7 @@ def snapshot(rows: pandas.DataFrame, geometry: Any, v0: float, path: str | os.Pa
     table), a page wide."""
     with _figure(path, (DOUBLE_COLUMN * 0.75, 5.1), PRINT_RC) as (mpl, fig, ax):
         _network(ax, rows, geometry, v0)
-        ax.text(0.01, 0.99, _time_text(float(rows["t"].iloc[0])), transform=ax.transAxes, ha="left", va="top")
+        ax.set_title(_time_text(float(rows["t"].iloc[0])))
         _network_legend(fig)
     return figure_paths(path)
 
@@ -153,10 +154,10 @@ def panels(snapshots: Mapping[str, pandas.DataFrame | None], geometry: Mapping[s
             if rows is None:
                 _field(ax, mine)
                 ax.text(0.5, 0.5, "not reached in this run", transform=ax.transAxes, ha="center", va="center")
-                ax.set_title(name)
+                ax.set_title(f"{name}\n")
                 continue
             _network(ax, rows, mine, v0)
-            ax.set_title(f"{name}, {_time_text(float(rows['t'].iloc[0]))}")
+            ax.set_title(f"{name}\n{_time_text(float(rows['t'].iloc[0]))}")
         for ax in axes.flat[1:]:
             ax.set_ylabel("")
         letter_panels(axes.flat)
@@ -181,8 +182,7 @@ def exploitation(frames: pandas.DataFrame, highlighted: Sequence[int], t_end: fl
             ax.plot(mine["x"].iloc[-1:], mine["y"].iloc[-1:], "o", color=colour, ms=5.0, mec="black", mew=0.5,
                     zorder=7)
             words.append(f"robot {robot}")
-        ax.text(0.01, 0.99, f"{_time_text(now)}; paths over the last {window_s:g} s", transform=ax.transAxes,
-                ha="left", va="top")
+        ax.set_title(f"{_time_text(now)}; paths: positions every n_T over the last {window_s:g} s")
         _network_legend(fig, words)
     return figure_paths(path)
 
@@ -254,18 +254,17 @@ def placement(curves: pandas.DataFrame, path: str | os.PathLike) -> list[Path]:
 def trip_curves(bins: pandas.DataFrame, conditions: Sequence[str], bin_s: float, path: str | os.PathLike) -> list[Path]:
     """Fig 6-8 a-d: the R-T trips' SOC cost, energy, distance and time against the entry time,
     mean (a marker at each bin's middle) +- sd per bin, one per condition."""
-    from ..figstyle import MIN_FONT_SIZE
-
     mine_styles = _condition_styles(conditions)
     with _figure(path, (DOUBLE_COLUMN, 5.2), PRINT_RC, nrows=2, ncols=2, squeeze=False) as (mpl, fig, axes):
         for ax, metric in zip(axes.flat, ("soc_cost", "energy_wh", "length_m", "duration_s")):
-            for condition in conditions:
-                rows = bins[(bins["metric"] == metric) & (bins["condition"] == condition)]
+            for k, condition in enumerate(conditions):
+                rows = bins[(bins["metric"] == metric) & (bins["condition"] == condition)].sort_values("bin_start_s")
                 if len(rows):
                     style = mine_styles[condition]
-                    rows = rows.assign(t=(rows["bin_start_s"] + bin_s / 2) / 60.0)
-                    _band(ax, rows, "t", style, condition)
-                    ax.plot(rows["t"], rows["mean"], ls="none", marker=style.marker, color=style.colour)
+                    # side by side within each bin, so that the whiskers of the conditions stay apart
+                    t = (rows["bin_start_s"] + bin_s / 2 + _dodge(k, len(conditions), 0.12 * bin_s)) / 60.0
+                    ax.errorbar(t, rows["mean"], yerr=rows["sd"], ls=style.linestyle, marker=style.marker,
+                                color=style.colour, capsize=1.5, elinewidth=0.6, label=condition)
             ax.set_ylabel(METRIC_WORDS[metric])
             ax.set_xlabel(f"entry time [min] ({bin_s:g}-s bins)")
             ax.tick_params(labelsize=MIN_FONT_SIZE)
@@ -281,6 +280,8 @@ def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence
     guidance network (solid) and without (eps = 1, dashed); (b) F(T_run) of each, mean +- sd,
     with the share the control keeps written over its bar. ``stats``: run_stats rows of one
     selection; conditions named "<layout>" and "<layout> eps=1"."""
+    from matplotlib.patches import Patch
+
     colours = _condition_styles(layouts)
     with _figure(path, (DOUBLE_COLUMN, 2.9), PRINT_RC, ncols=2, squeeze=False,
                  width_ratios=(1.6, 1.0)) as (mpl, fig, axes):
@@ -297,18 +298,22 @@ def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence
         ax.legend(loc="upper left", frameon=False, ncols=1)
         final = stats[stats["column"] == "resources"].set_index("condition")
         for k, layout in enumerate(layouts):
-            for offset, condition, hatch in ((-0.2, layout, ""), (0.2, f"{layout} eps=1", "//")):
+            colour = colours[layout].colour
+            for offset, condition, fill in ((-0.2, layout, True), (0.2, f"{layout} eps=1", False)):
                 if condition not in final.index:
                     continue
                 mean, sd = final.loc[condition, ["mean", "sd"]]
-                bars.bar(k + offset, mean, 0.38, yerr=sd, color=colours[layout].colour, hatch=hatch, ec="black",
-                         lw=0.5, error_kw={"lw": 0.8})
+                bars.bar(k + offset, mean, 0.38, yerr=sd, color=colour if fill else "white",
+                         hatch="" if fill else "///", ec=colour, lw=0.8, error_kw={"lw": 0.8, "ecolor": "black"})
             if layout in final.index and f"{layout} eps=1" in final.index and final.loc[layout, "mean"] > 0:
                 share = final.loc[f"{layout} eps=1", "mean"] / final.loc[layout, "mean"]
                 bars.annotate(f"{share:.0%}", (k + 0.2, final.loc[f"{layout} eps=1", "mean"]),
                               xytext=(0, 3), textcoords="offset points", ha="center", va="bottom")
         bars.set_xticks(range(len(layouts)), layouts)
-        bars.set_ylabel("F(T_run) [units]; plain: network, hatched: eps = 1")
+        bars.set_ylabel("F(T_run) [units]")
+        bars.legend(handles=[Patch(fc="0.4", ec="0.4", label="network"),
+                             Patch(fc="white", ec="0.4", hatch="///", label="eps = 1")], loc="upper right",
+                    frameon=False)
         bars.grid(alpha=0.3, axis="y")
         letter_panels([ax, bars])
     return figure_paths(path)

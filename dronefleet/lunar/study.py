@@ -47,9 +47,10 @@ QUICK = (f"{QUICK_CHANGES['runs']} runs of {QUICK_CHANGES['duration_s']:g} s per
 E0 = {"layout": "SOFT-RT", "runs": 1, "first_run": 0, "frames": True}
 #: The snapshot labels each E0 figure draws (Fig 6-4's panels in order).
 E0_LABELS = {"lunar-fig03": ("end",), "lunar-fig04": ("first_T", "first_R", "first_row5")}
-#: Figs 6-5 and 6-6: the time of the snapshot as a fraction of T_run, and the window of the paths [s].
+#: Figs 6-5 and 6-6: the time of the snapshot as a fraction of T_run, and the window of the paths [s]
+#: (frames are n_T = 10 s apart, about 12.5 m: a longer window is a tangle of straight strokes).
 E0_EXPLOITATION = {"lunar-fig05": 0.5, "lunar-fig06": 1.0}
-PATH_WINDOW_S = 300.0
+PATH_WINDOW_S = 60.0
 #: Per figure: experiment -> the conditions it draws of it (None: all of the sweep's).
 SOURCES: dict[str, dict[str, tuple[str, ...] | None]] = {
     "lunar-fig07": {"e1": None},

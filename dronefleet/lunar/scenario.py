@@ -38,6 +38,7 @@ import math
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -52,7 +53,8 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "RUN_LIMITS",
            "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config",
-           "run_size", "table_schemas", "simulate", "format_summary", "describe", "label", "study"]
+           "run_size", "table_schemas", "simulate", "format_summary", "describe", "label", "replay_data",
+           "check_replayable", "study"]
 
 NAME = "lunar"
 TABLES = ("summary", "timeseries", "trips", "snapshots")
@@ -404,6 +406,23 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         sd = f"{x.std(ddof=1):{fmt}}" if x.size > 1 else "-"
         lines.append(f"  {text:<28}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}{note}")
     return "\n".join(lines)
+
+
+def replay_data(run_dir: Path, trial: int | None = None) -> dict[str, Any]:
+    """The replay page's data of a run folder (its config read from ``summary.parquet``), of its
+    run ``trial`` (None: its first): :func:`dronefleet.lunar.replay.replay_data`."""
+    from .replay import chosen_run
+    from .replay import replay_data as data
+
+    config = read_config(run_dir / "summary.parquet")
+    return data(run_dir, config, describe(config), chosen_run(run_dir, config, trial))
+
+
+def check_replayable(config: Config) -> None:
+    """Refuse ``run --replay`` of a run whose page would be too large (:mod:`dronefleet.lunar.replay`)."""
+    from .replay import check_replayable as check
+
+    check(config)
 
 
 def study() -> Any:

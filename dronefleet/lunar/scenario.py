@@ -372,9 +372,10 @@ def _options(config: Config) -> str:
 def describe(config: Config) -> str:
     """One line naming the configuration (the head of ``run``)."""
     p = config
+    runs = f"run {p.first_run}" if p.runs == 1 else f"runs {p.first_run}-{p.first_run + p.runs - 1}"
     return (f"{p.layout} (scale {p.layout_scale:g}), {counted(p.n_robots, 'robot')}, {p.battery_wh:g} Wh, "
-            f"v0 {p.v0:g} m/s, eps {p.eps:g}{_options(p)}; runs {p.first_run}-{p.first_run + p.runs - 1} "
-            f"(seed {p.seed}) x {p.duration_s:g} s ({p.ticks:,} ticks)")
+            f"v0 {p.v0:g} m/s, eps {p.eps:g}{_options(p)}; {runs} (seed {p.seed}) x {p.duration_s:g} s "
+            f"({p.ticks:,} ticks)")
 
 
 def label(config: Config) -> str:

@@ -25,26 +25,8 @@ RUNS = {
 }
 
 
-def _replay_data(run_dir, trial=None):
-    """The hook scenario.py is to have (LUNAR study report): the page's data of run ``trial``."""
-    config = scenario.read_config(run_dir / "summary.parquet")
-    return lunar_replay.replay_data(run_dir, config, scenario.describe(config),
-                                    lunar_replay.chosen_run(run_dir, config, trial))
-
-
-@pytest.fixture(scope="module", autouse=True)
-def hooks():
-    """scenario.py's replay hooks, until the shell branch has them."""
-    with pytest.MonkeyPatch.context() as patch:
-        if not hasattr(scenario, "replay_data"):
-            _replay_data.__module__ = scenario.__name__   # the page's script is the one beside it
-            patch.setattr(scenario, "replay_data", _replay_data, raising=False)
-            patch.setattr(scenario, "check_replayable", lunar_replay.check_replayable, raising=False)
-        yield
-
-
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory, hooks):
+def runs(tmp_path_factory):
     folder = tmp_path_factory.mktemp("lunar")
     out = {}
     for name, argv in RUNS.items():

@@ -3,7 +3,9 @@ synthetic tables whose answers are known (the selected 30 are the top 30 by reso
 sds, R-T trips of both directions binned by entry time, the median run), every figure drawn from
 its tables, --check re-deriving them, and the figures in ``reproduce --list``."""
 
+import importlib
 import math
+import shutil
 import sys
 import types
 from pathlib import Path
@@ -28,14 +30,18 @@ CONDITIONS = {
 }
 
 
+def _fake(patch):
+    real = importlib.import_module("dronefleet.lunar.simulate")
+    fake = types.ModuleType("dronefleet.lunar.simulate")
+    fake.simulate, fake.table_schemas = synthetic.simulate, real.table_schemas
+    patch.setitem(sys.modules, "dronefleet.lunar.simulate", fake)
+    patch.setattr(experiments, "grid_path", lambda experiment: Path(f"lunar-{experiment}.toml"))
+
+
 @pytest.fixture
 def fake_simulator(monkeypatch):
-    """dronefleet.lunar.simulate replaced by the synthetic tables."""
-    fake = types.ModuleType("dronefleet.lunar.simulate")
-    fake.simulate = synthetic.simulate
-    monkeypatch.setitem(sys.modules, "dronefleet.lunar.simulate", fake)
-    monkeypatch.setattr(experiments, "grid_path", lambda experiment: Path(f"lunar-{experiment}.toml"))
-    return fake
+    """dronefleet.lunar.simulate replaced by the synthetic tables, the sweeps by :data:`CONDITIONS`."""
+    _fake(monkeypatch)
 
 
 class Context:
@@ -175,16 +181,28 @@ def test_a_condition_holding_a_run_twice_is_refused(fake_simulator):
                                  LunarParams(layout="OPEN", runs=2, duration_s=100.0, seed=3)], "e1")
 
 
+@pytest.fixture(scope="module")
+def drawn(tmp_path_factory):
+    """Every lunar figure tidied and drawn from the synthetic experiments (--quick sizes), once."""
+    with pytest.MonkeyPatch.context() as patch:
+        _fake(patch)
+        context = Context(tmp_path_factory.mktemp("lunar-study"))
+        study.run_together(context, list(study.FIGURES))
+        files = {}
+        for figure in study.FIGURES:
+            study.tidy(context, figure)
+            files[figure] = study.draw(context, figure)
+        yield context, files
+
+
 @pytest.fixture
-def synthetic_results(fake_simulator, tmp_path):
-    """Every lunar figure tidied and drawn from the synthetic experiments (--quick sizes)."""
-    context = Context(tmp_path)
-    study.run_together(context, list(study.FIGURES))
-    files = {}
-    for figure in study.FIGURES:
-        study.tidy(context, figure)
-        files[figure] = study.draw(context, figure)
-    return context, files
+def synthetic_results(drawn, fake_simulator, tmp_path):
+    """:func:`drawn`'s results in a copy of their own (a test may change them)."""
+    context, files = drawn
+    copy = Context(tmp_path / "results")
+    shutil.copytree(context.root, copy.root)
+    return copy, {figure: [copy.root / path.relative_to(context.root) for path in paths]
+                  for figure, paths in files.items()}
 
 
 def test_every_figure_is_drawn_from_its_tables(synthetic_results):

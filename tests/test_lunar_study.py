@@ -8,6 +8,7 @@ import math
 import shutil
 import sys
 import types
+from contextlib import contextmanager
 from pathlib import Path
 
 import lunar_synthetic as synthetic
@@ -15,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from dronefleet import reproduce
+from dronefleet import figstyle, reproduce
 from dronefleet.lunar import experiments, study
 from dronefleet.lunar.params import LunarParams
 
@@ -211,6 +212,9 @@ def test_every_figure_is_drawn_from_its_tables(synthetic_results):
         names = {path.name for path in files[figure]}
         assert f"{figure}.png" in names and f"{figure}.pdf" in names and f"{figure}.svg" in names, figure
         assert all(path.stat().st_size > 0 for path in files[figure])
+        for png in (path for path in files[figure] if path.suffix == ".png"):   # a page wide, at print size
+            width = int.from_bytes(png.read_bytes()[16:20], "big")
+            assert width == round(figstyle.DOUBLE_COLUMN * figstyle.DPI), png.name
     assert (context.root / "lunar-fig07" / "lunar-fig07-alignment.svg").exists()
     runs = pd.read_parquet(context.root / "lunar-fig07" / "runs.parquet")
     assert list(runs.columns[:8]) == [*experiments.CONDITION_COLUMNS, "v0", "run"]
@@ -303,3 +307,27 @@ def test_the_synthetic_tables_have_the_simulators_columns_and_types():
     tables = synthetic.simulate(LunarParams(runs=2, duration_s=60.0, frames=True))
     for name, schema in table_schemas().items():
         assert tables[name].schema.equals(schema), name
+
+
+def test_a_milestone_the_run_never_reached_is_an_empty_field_saying_so(tmp_path):
+    from dronefleet.lunar import figures
+    from dronefleet.lunar.layout import build
+
+    params = LunarParams(runs=1, duration_s=60.0)
+    snapshots = synthetic.simulate(params)["snapshots"].to_pandas()
+    kept = {}
+    original = figures._figure
+
+    @contextmanager
+    def keeping(path, *args, **kwargs):
+        with original(path, *args, **kwargs) as (mpl, fig, axes):
+            kept["fig"] = fig
+            yield mpl, fig, axes
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(figures, "_figure", keeping)
+        files = figures.panels({"first entry into T": snapshots[snapshots["label"] == "first_T"],
+                                "first row 5": None}, build(params), params.v0, tmp_path / "milestones")
+    assert [path.name for path in files] == ["milestones.png", "milestones.pdf", "milestones.svg"]
+    texts = [text.get_text() for ax in kept["fig"].axes for text in ax.texts]
+    assert "not reached in this run" in texts
+

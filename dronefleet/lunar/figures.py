@@ -134,7 +134,7 @@ def _time_text(t: float) -> str:
 def snapshot(rows: pandas.DataFrame, geometry: Any, v0: float, path: str | os.PathLike) -> list[Path]:
     """Fig 6-3: one network snapshot (``rows``: the robots of one label and time of the snapshots
     table), a page wide."""
-    with _figure(path, (DOUBLE_COLUMN * 0.75, 5.1), PRINT_RC) as (mpl, fig, ax):
+    with _figure(path, (DOUBLE_COLUMN, 6.6), PRINT_RC) as (mpl, fig, ax):
         _network(ax, rows, geometry, v0)
         ax.set_title(_time_text(float(rows["t"].iloc[0])))
         _network_legend(fig)
@@ -173,7 +173,7 @@ def exploitation(frames: pandas.DataFrame, highlighted: Sequence[int], t_end: fl
     times = np.sort(frames["t"].unique())
     now = times[times <= t_end + 1e-9][-1]
     window = frames[(frames["t"] > now - window_s - 1e-9) & (frames["t"] <= now + 1e-9)]
-    with _figure(path, (DOUBLE_COLUMN * 0.75, 5.1), PRINT_RC) as (mpl, fig, ax):
+    with _figure(path, (DOUBLE_COLUMN, 6.6), PRINT_RC) as (mpl, fig, ax):
         _network(ax, frames[frames["t"] == now], geometry, v0)
         words = []
         for colour, robot in zip(PATH_COLOURS, highlighted):

@@ -732,6 +732,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     s_hat = np.zeros((n, 3))
     no_r_guidance = np.zeros(n, dtype=np.bool_)
     hits = np.empty(N_RAYS)
+    close = np.zeros(n, dtype=np.int64)  # bodies near the moving robot
     f_hist = np.zeros(n_ticks + 1, dtype=np.int64)
     nb_hist = np.zeros(n_ticks + 1, dtype=np.int64)
     row_counts = np.zeros(ROW_D, dtype=np.int64)
@@ -810,6 +811,8 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
 
             # 2. snapshot of the end of tick k-1: distances, links, beacon inboxes (section 5)
             for i in range(spawned):
+                if status[i] != ALIVE or role[i] == B:
+                    continue                       # only mobile robots sense, link and move
                 xi = x[i]
                 yi = y[i]
                 for j in range(spawned):
@@ -994,6 +997,11 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 any_hit = False
                 near_wall = xi < ray_len or yi < ray_len or xi > field_w - ray_len or yi > field_h - ray_len
                 near_obstacle = hard and near_box(xi, yi, ray_len, box)
+                n_near = 0                         # bodies a ray or this tick's step can reach
+                for j in range(spawned):
+                    if d2[i, j] < ray_reach2 and j != i and status[j] != UNSPAWNED:
+                        close[n_near] = j
+                        n_near += 1
                 for r in range(N_RAYS):
                     hits[r] = np.inf
                     rdx = cx * ray_c[r] - cy * ray_s[r]
@@ -1007,9 +1015,9 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                             f = (e + 1) % 4
                             best = min(best, ray_segment(xi, yi, rdx, rdy, g[c + 2 * e], g[c + 2 * e + 1],
                                                          g[c + 2 * f], g[c + 2 * f + 1]))
-                    for j in range(spawned):
-                        if j != i and status[j] != UNSPAWNED and d2[i, j] < ray_reach2:
-                            best = min(best, ray_disc(xi, yi, rdx, rdy, x[j], y[j], r_body))
+                    for q in range(n_near):
+                        j = close[q]
+                        best = min(best, ray_disc(xi, yi, rdx, rdy, x[j], y[j], r_body))
                     if best <= ray_len:
                         hits[r] = best
                         any_hit = True
@@ -1032,8 +1040,9 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 if ok and hard and near_box(nx, ny, r_body, box):
                     ok = not disc_hits_quad(nx, ny, r_body, g)
                 if ok:
-                    for j in range(spawned):
-                        if j != i and status[j] != UNSPAWNED and d2[i, j] < touch_reach2:
+                    for q in range(n_near):
+                        j = close[q]
+                        if d2[i, j] < touch_reach2:
                             dx = nx - x[j]
                             dy = ny - y[j]
                             if dx * dx + dy * dy < touch2:

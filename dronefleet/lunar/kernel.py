@@ -793,7 +793,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
         for k in range(1, n_ticks + 1):
             if stop[0] != 0:
                 break
-            milestone = -1
+            milestones = 0                         # bit per milestone label reached this tick
             # 1. spawn (A33)
             if spawned < n:
                 clear = True
@@ -928,7 +928,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     blocked[i] = 0
                 elif row == 5 and t_first[2] < 0:
                     t_first[2] = k
-                    milestone = LABEL_FIRST_ROW5
+                    milestones |= 1 << LABEL_FIRST_ROW5
                 if row == 9:                       # A17: rows 9 and 11 complete N and T
                     s_c[i] = F_IN
                     n_failed[i] = 0
@@ -1101,10 +1101,10 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     if newreg != NO_REGION:
                         if newreg == REG_T and t_first[0] < 0:
                             t_first[0] = k
-                            milestone = LABEL_FIRST_T
+                            milestones |= 1 << LABEL_FIRST_T
                         elif newreg == REG_R and t_first[1] < 0:
                             t_first[1] = k
-                            milestone = LABEL_FIRST_R
+                            milestones |= 1 << LABEL_FIRST_R
                     reg[i] = newreg
 
             # 8. beacon windows (section 6), decay and revert (row D, 7.3)
@@ -1189,9 +1189,10 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
                 for q in range(3):
                     rec[TS_ALIGN + q] = align[q]
-            if milestone >= 0:
-                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, milestone, k, n, status, role, mode, x, y,
-                                           theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+            for label in (LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5):
+                if milestones & (1 << label):
+                    snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, label, k, n, status, role, mode, x, y,
+                                               theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
             if k % snap_every == 0:
                 snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
                                            y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)

@@ -431,3 +431,19 @@ def test_small_run_tables_are_consistent():
     assert (snaps.groupby(["run", "label", "t"]).size() == params.n_robots).all()
     others = snaps[snaps.role != "B"]
     assert (others[["omega_T", "omega_N", "omega_R", "S_T", "S_N", "S_R"]] == 0.0).all().all()
+
+
+def test_a_row_the_supervisor_forbids_does_not_fire():
+    from dronefleet.lunar.simulate import run_seeds
+
+    params = LunarParams(n_robots=6, runs=1, duration_s=30.0)
+    opts, pars, geometry = kernel_inputs(params)
+    runs, seeds = run_seeds(params)
+    table = role_table()[0].copy()
+    stop = np.zeros(1, np.int8)
+    summary = k.run_runs(opts, pars, geometry, seeds, runs, table, stop)[0]
+    # the first robot to leave the nest has no beacon in range anywhere: row 1 fires
+    assert summary[0, k.SM_ROWS + 0] > 0 and summary[0, k.SM_BEACONS] > 0
+    table[0, :, k.EV_BECOME_BEACON] = -1
+    summary, series = k.run_runs(opts, pars, geometry, seeds, runs, table, stop)[:2]
+    assert summary[0, k.SM_ROWS + 0] == 0 and (series[0, :, k.TS_BEACONS] == 0).all()

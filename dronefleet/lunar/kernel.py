@@ -10,8 +10,22 @@ plain arrays indexed by robot id (spawn order). Roles are the states of the role
 Only + - * / sqrt, floor and :mod:`dronefleet.fpmath` (sincos, atan2, exp, log) touch the
 trajectory, so a run is bit-identical on any CPU. The rules the tests pin are small functions
 of plain arrays: :func:`beacon_update` (section 6), :func:`beacon_weight`, :func:`guidance` and
-:func:`follow_or_search` (7.1), :func:`avoidance_offset` (7.4), :func:`power_out` and
-:func:`energy_step` (section 8).
+:func:`follow_or_search` (7.1), :func:`avoidance_offset` (7.4), :func:`tick_energy` (section 8),
+:func:`choose_row` (section 9), :func:`broadcast_velocity` (section 5), :func:`become_beacon` and
+:func:`region_change` (section 12).
+
+Details the spec leaves to the implementation, as read here:
+- A robot spawned at tick k is in that tick's snapshot (at the spawn point) and decides at once.
+- The countdown is a per-robot clock: at 0 it restarts at n_T whatever the mode; only NORMAL and
+  BACKTRACK robots decide then (a robot leaving R after charging keeps its 7.2 turn until its
+  next due decision). Immediate decisions (7.3, A41) do not restart it.
+- Row 3 also matches a robot already in role R (nothing changes, but row 9 cannot fire before
+  it has charged); only the changes of role are counted as row-3 firings (``nest_recharges``).
+- A new beacon's first window opens at the next tick, so every window holds n_T snapshots.
+- ``broadcast = "update"``: a robot broadcasts in the tick after each of its heading decisions.
+- A trip's length and energy are those of the ticks after the one it left its region in, up
+  to the one it entered the other in; its duration is (tick entered - tick left) tau.
+- The heading alignment of section 12 uses the motion heading of the last tick.
 """
 
 import numpy as np

@@ -32,6 +32,11 @@ S_F_OUT, S_F_IN, S_R, S_R_CHARGING, S_B_F_OUT, S_B_F_IN, S_B_R, S_DEAD = range(8
 # Columns of the transition table the kernel is given (simulate.EVENTS, in this order).
 (EV_BECOME_BEACON, EV_GO_CHARGE, EV_CHARGE, EV_GO_OUT, EV_GO_IN, EV_LOAD, EV_UNLOAD, EV_REVERT,
  EV_TURN_AROUND, EV_DEPLETED) = range(10)
+#: Role of each supervisor state (-1: DEAD keeps the last role); a beacon state remembers s_prev.
+ROLE_OF_STATE = np.array([F_OUT, F_IN, R, R, B, B, B, -1])
+#: Supervisor event of each row 1..11 of section 9 (index 0 unused).
+ROW_EVENT = np.array([-1, EV_BECOME_BEACON, EV_GO_CHARGE, EV_GO_CHARGE, EV_CHARGE, EV_GO_IN, EV_GO_OUT, EV_GO_IN,
+                      EV_GO_OUT, EV_GO_OUT, EV_GO_IN, EV_GO_IN])
 # Weight forms (A12), redecide options (A41).
 W_EXPONENT, W_BRACKET, W_LITERAL = 0, 1, 2
 REDECIDE_NONE, REDECIDE_AVOID_CLEAR, REDECIDE_BEACON_CHANGE = 0, 1, 2
@@ -244,6 +249,115 @@ def energy_step(energy, e_cap, p_in, p_out, tau, exploit):
     return e
 
 
+@njit(cache=True)
+def tick_energy(energy, pars, in_r, mobile, links, moved, kappa, avoiding, loaded):
+    """One tick of section 8 for an alive robot: (new E [J], gross energy used [J]). Solar input
+    P_solar whenever the centre is in R (``in_r``, any role), locomotion times ``kappa`` (the
+    soft patch), E_exploit when it loaded this tick; E = 0 afterwards means death (row X)."""
+    p_out = power_out(pars[P_COMP], pars[P_COMM], links, mobile, pars[P_SCAN], moved, pars[P_MOVE], kappa,
+                      avoiding, pars[P_AVOID])
+    p_in = pars[P_SOLAR] if in_r else 0.0
+    exploit = pars[P_EXPLOIT] if loaded else 0.0
+    return energy_step(energy, pars[P_ECAP], p_in, p_out, pars[P_TAU], exploit), p_out * pars[P_TAU] + exploit
+
+
+@njit(cache=True)
+def choose_row(role, mode, region, n_in_range, role_k1, role_k2, soc, s_hat, visited_r, full, loaded, no_r_guidance):
+    """The row of section 9 (1..11; 0: none) that fires for an alive mobile robot: the first whose
+    guard holds, from the robot's role and mode, its region (REG_* or NO_REGION), the number of
+    beacons in range, its roles at k-1 and k-2, SOC, S_hat by key (3,), visited_R, E = E_cap,
+    l > 0 and "no R guidance" (all from the section-5 snapshot). Row 3 also fires in role R (a
+    no-op there: the robot already goes to charge, which keeps row 9 from firing)."""
+    charging = mode == CHARGING
+    if n_in_range == 0 and role_k1 != B and role_k2 != B and region != REG_N and mode != RECONNECT:
+        return 1
+    if role != R and (soc < s_hat[role] or soc < s_hat[R]):
+        return 2
+    if region == REG_N and not visited_r:
+        return 3
+    if role == R and not charging and region == REG_R:
+        return 4
+    if charging and full:
+        if no_r_guidance:
+            return 5
+        return 7 if loaded else 6
+    if role == F_IN and region == REG_N:
+        return 8
+    if role == R and not charging and region == REG_N and soc > s_hat[F_OUT] and soc > s_hat[R]:
+        return 9
+    if role == F_OUT and region == REG_T:
+        return 10
+    if role == R and not charging and region == REG_T and soc > s_hat[F_IN] and soc > s_hat[R]:
+        return 11
+    return 0
+
+
+@njit(cache=True)
+def broadcast_velocity(charging, motion, v0, pcx, pcy, mdx, mdy):
+    """The reversed velocity -v_m a mobile robot broadcasts (section 5, A28): its planned
+    velocity v0 (pcx, pcy), or with ``motion`` this tick's motion v0 (mdx, mdy); 0 while charging."""
+    if charging:
+        return 0.0, 0.0
+    if motion:
+        return -v0 * mdx, -v0 * mdy
+    return -v0 * pcx, -v0 * pcy
+
+
+@njit(cache=True)
+def clear_memory(i, omega, bvx, bvy, bsoc, binit, weight):
+    """Beacon memory of robot i back to omega = 0, v = 0, S = 0, init = false (L621)."""
+    for q in range(3):
+        omega[i, q] = 0.0
+        bvx[i, q] = 0.0
+        bvy[i, q] = 0.0
+        bsoc[i, q] = 0.0
+        binit[i, q] = False
+        weight[i, q] = 0.0
+
+
+@njit(cache=True)
+def become_beacon(i, k, n_t, countdown, beacon_since, last_left, omega, bvx, bvy, bsoc, binit, weight, ikey):
+    """Robot i becomes a beacon at tick k (row 1): fresh memory and inbox, window countdown n_T
+    (its first window opens at k + 1), and the trip in progress voided (section 12)."""
+    countdown[i] = n_t
+    beacon_since[i] = k
+    last_left[i] = NO_REGION
+    clear_memory(i, omega, bvx, bvy, bsoc, binit, weight)
+    ikey[i, :] = -1
+
+
+@njit(cache=True)
+def region_change(i, k, old, new, role, last_left, tick_left, role_left, acc, trips, n_trips, run_id):
+    """Trip bookkeeping (section 12) of robot i whose region went from ``old`` to ``new`` at tick k:
+    leaving a region starts a trip (``acc[i]`` = length, energy, soft length reset), entering a
+    region Y other than the last one left appends a trip record. Returns (trips, n_trips)."""
+    if old != NO_REGION:
+        last_left[i] = old
+        tick_left[i] = k
+        role_left[i] = role
+        acc[i, 0] = 0.0
+        acc[i, 1] = 0.0
+        acc[i, 2] = 0.0
+    if new != NO_REGION:
+        if last_left[i] != NO_REGION and last_left[i] != new:
+            trips = _room(trips, n_trips, 1)
+            row = trips[n_trips]
+            row[TR_RUN] = run_id
+            row[TR_ORIGIN] = last_left[i]
+            row[TR_DEST] = new
+            row[TR_TICK_LEFT] = tick_left[i]
+            row[TR_TICK_ENTERED] = k
+            row[TR_LENGTH] = acc[i, 0]
+            row[TR_ENERGY] = acc[i, 1]
+            row[TR_SOFT] = acc[i, 2]
+            row[TR_ROLE_LEFT] = role_left[i]
+            row[TR_ROLE_ENTERED] = role
+            row[TR_ROBOT] = i
+            n_trips += 1
+        last_left[i] = NO_REGION
+    return trips, n_trips
+
+
 # ------------------------------------------------------------------ geometry
 
 
@@ -446,7 +560,7 @@ def _snapshot(snaps, used, run, label, k, n, status, role, mode, x, y, theta, en
 
 
 @njit(cache=True)
-def _alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
+def alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
     """Guidance alignment per key (section 12) over alive beacons with |v^X| > 0 into
     ``out[0:3]`` (mean cos) and ``weighted[0:3]`` (omega-weighted); NaN where none."""
     for q in range(3):
@@ -525,8 +639,6 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     reward, lam, kappa_soft = pars[P_REWARD], pars[P_LAMBDA], pars[P_KAPPA]
     e_cap = pars[P_ECAP]
     soc0 = pars[P_SOC0]
-    p_move, p_comp, p_comm, p_scan = pars[P_MOVE], pars[P_COMP], pars[P_COMM], pars[P_SCAN]
-    p_avoid, e_exploit, p_solar = pars[P_AVOID], pars[P_EXPLOIT], pars[P_SOLAR]
     r_body = pars[P_RBODY]
     ray_len = r_body + pars[P_IR]
     step = v0 * tau
@@ -565,7 +677,6 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     status = np.zeros(n, dtype=np.int64)
     role = np.zeros(n, dtype=np.int64)
     mode = np.zeros(n, dtype=np.int64)
-    s_prev = np.zeros(n, dtype=np.int64)
     role_k1 = np.zeros(n, dtype=np.int64)
     role_k2 = np.zeros(n, dtype=np.int64)
     x = np.zeros(n)
@@ -597,9 +708,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     last_left = np.zeros(n, dtype=np.int64)
     tick_left = np.zeros(n, dtype=np.int64)
     role_left = np.zeros(n, dtype=np.int64)
-    acc_len = np.zeros(n)
-    acc_energy = np.zeros(n)
-    acc_soft = np.zeros(n)
+    acc = np.zeros((n, 3))            # trip accumulators: length, gross energy, soft length
     moved = np.zeros(n, dtype=np.bool_)
     kappa = np.ones(n)
     loaded_now = np.zeros(n, dtype=np.bool_)
@@ -623,6 +732,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     s_hat = np.zeros((n, 3))
     no_r_guidance = np.zeros(n, dtype=np.bool_)
     hits = np.empty(N_RAYS)
+    close = np.zeros(n, dtype=np.int64)  # bodies near the moving robot
     f_hist = np.zeros(n_ticks + 1, dtype=np.int64)
     nb_hist = np.zeros(n_ticks + 1, dtype=np.int64)
     row_counts = np.zeros(ROW_D, dtype=np.int64)
@@ -662,9 +772,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
         nearest[:] = -1
         reg[:] = REG_N
         last_left[:] = NO_REGION
-        acc_len[:] = 0.0
-        acc_energy[:] = 0.0
-        acc_soft[:] = 0.0
+        acc[:] = 0.0
         omega[:] = 0.0
         bvx[:] = 0.0
         bvy[:] = 0.0
@@ -685,7 +793,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
         for k in range(1, n_ticks + 1):
             if stop[0] != 0:
                 break
-            milestone = -1
+            milestones = 0                         # bit per milestone label reached this tick
             # 1. spawn (A33)
             if spawned < n:
                 clear = True
@@ -703,6 +811,8 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
 
             # 2. snapshot of the end of tick k-1: distances, links, beacon inboxes (section 5)
             for i in range(spawned):
+                if status[i] != ALIVE or role[i] == B:
+                    continue                       # only mobile robots sense, link and move
                 xi = x[i]
                 yi = y[i]
                 for j in range(spawned):
@@ -770,15 +880,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 # the broadcast (s_c, Delta, -v_m, u) heard by every beacon in range
                 gamma = reward if reg[i] == s_c[i] else 0.0
                 delta = gamma + lam * best_omega
-                if mode[i] == CHARGING:
-                    mvx = 0.0
-                    mvy = 0.0
-                elif bcast_motion:
-                    mvx = -v0 * mdx[i]
-                    mvy = -v0 * mdy[i]
-                else:
-                    mvx = -v0 * pcx[i]
-                    mvy = -v0 * pcy[i]
+                mvx, mvy = broadcast_velocity(mode[i] == CHARGING, bcast_motion, v0, pcx[i], pcy[i], mdx[i], mdy[i])
                 used = max(0.0, soc_ref[i] - energy[i] / e_cap)
                 for q in range(nb_cnt[i]):
                     b = nb_list[i, q]
@@ -807,74 +909,27 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 elif rg == r0:                     # F_OUT in T, F_IN in N, R in R
                     s_c[i] = r0
                     n_failed[i] = 0
-                soc = energy[i] / e_cap
-                charging = mode[i] == CHARGING
-                row = 0
-                if nb_cnt[i] == 0 and role_k1[i] != B and role_k2[i] != B and rg != REG_N and \
-                        mode[i] != RECONNECT:
-                    row = 1
-                elif r0 != R and (soc < s_hat[i, r0] or soc < s_hat[i, R]):
-                    row = 2
-                elif rg == REG_N and not visited_r[i]:
-                    row = 3
-                elif r0 == R and not charging and rg == REG_R:
-                    row = 4
-                elif charging and energy[i] == e_cap:
-                    row = 5 if no_r_guidance[i] else (6 if load[i] == 0 else 7)
-                elif r0 == F_IN and rg == REG_N:
-                    row = 8
-                elif r0 == R and not charging and rg == REG_N and soc > s_hat[i, F_OUT] and soc > s_hat[i, R]:
-                    row = 9
-                elif r0 == F_OUT and rg == REG_T:
-                    row = 10
-                elif r0 == R and not charging and rg == REG_T and soc > s_hat[i, F_IN] and soc > s_hat[i, R]:
-                    row = 11
+                row = choose_row(r0, mode[i], rg, nb_cnt[i], role_k1[i], role_k2[i], energy[i] / e_cap, s_hat[i],
+                                 visited_r[i], energy[i] == e_cap, load[i] > 0, no_r_guidance[i])
                 if row == 0 or (row == 3 and r0 == R):
                     continue                       # row 3 in role R: already going to charge
-                turn = row >= 3 or turn_any
-                if row == 1:
-                    if not take(table, sup, i, EV_BECOME_BEACON):
-                        continue
-                    s_prev[i] = r0
-                    role[i] = B
+                if not take(table, sup, i, ROW_EVENT[row]):
+                    continue                       # the supervisor forbids it: the row does not fire
+                state = sup[i, 0]
+                role[i] = ROLE_OF_STATE[state]     # the role IS the supervisor's state
+                if state == S_R_CHARGING:
+                    mode[i] = CHARGING
+                elif mode[i] == CHARGING or row == 1:
                     mode[i] = NORMAL
-                    countdown[i] = n_t
-                    beacon_since[i] = k
-                    last_left[i] = NO_REGION       # a beacon spell voids the trip in progress
+                if row == 1:
+                    become_beacon(i, k, n_t, countdown, beacon_since, last_left, omega, bvx, bvy, bsoc, binit,
+                                  weight, ikey)
                     avoiding[i] = False
                     blocked[i] = 0
-                    for q in range(3):
-                        omega[i, q] = 0.0
-                        bvx[i, q] = 0.0
-                        bvy[i, q] = 0.0
-                        bsoc[i, q] = 0.0
-                        binit[i, q] = False
-                        weight[i, q] = 0.0
-                    ikey[i, :] = -1
-                    turn = False
-                elif row == 2 or row == 3:
-                    if not take(table, sup, i, EV_GO_CHARGE):
-                        continue
-                    role[i] = R
-                elif row == 4:
-                    if not take(table, sup, i, EV_CHARGE):
-                        continue
-                    mode[i] = CHARGING
-                    turn = False
-                elif row == 6 or row == 8 or row == 9:
-                    if not take(table, sup, i, EV_GO_OUT):
-                        continue
-                    role[i] = F_OUT
-                else:                              # rows 5, 7, 10, 11
-                    if not take(table, sup, i, EV_GO_IN):
-                        continue
-                    role[i] = F_IN
-                if row >= 5 and row <= 7:
-                    mode[i] = NORMAL
-                    if row == 5 and t_first[2] < 0:
-                        t_first[2] = k
-                        milestone = LABEL_FIRST_ROW5
-                if row == 9:
+                elif row == 5 and t_first[2] < 0:
+                    t_first[2] = k
+                    milestones |= 1 << LABEL_FIRST_ROW5
+                if row == 9:                       # A17: rows 9 and 11 complete N and T
                     s_c[i] = F_IN
                     n_failed[i] = 0
                 elif row == 11:
@@ -883,7 +938,8 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 if (row == 10 or row == 11) and take(table, sup, i, EV_LOAD):
                     load[i] = r_max
                     loaded_now[i] = True
-                if turn and take(table, sup, i, EV_TURN_AROUND):
+                # 7.2 (A26): turn on the role changes inside a region (rows 3, 5-11); "any": row 2 too
+                if (row == 3 or row >= 5 or (row == 2 and turn_any)) and take(table, sup, i, EV_TURN_AROUND):
                     theta_a[i] = wrap(theta[i] + PI)
                     theta[i] = theta_a[i]
                     pcy[i], pcx[i] = sincos(theta_a[i])
@@ -941,6 +997,11 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 any_hit = False
                 near_wall = xi < ray_len or yi < ray_len or xi > field_w - ray_len or yi > field_h - ray_len
                 near_obstacle = hard and near_box(xi, yi, ray_len, box)
+                n_near = 0                         # bodies a ray or this tick's step can reach
+                for j in range(spawned):
+                    if d2[i, j] < ray_reach2 and j != i and status[j] != UNSPAWNED:
+                        close[n_near] = j
+                        n_near += 1
                 for r in range(N_RAYS):
                     hits[r] = np.inf
                     rdx = cx * ray_c[r] - cy * ray_s[r]
@@ -954,9 +1015,9 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                             f = (e + 1) % 4
                             best = min(best, ray_segment(xi, yi, rdx, rdy, g[c + 2 * e], g[c + 2 * e + 1],
                                                          g[c + 2 * f], g[c + 2 * f + 1]))
-                    for j in range(spawned):
-                        if j != i and status[j] != UNSPAWNED and d2[i, j] < ray_reach2:
-                            best = min(best, ray_disc(xi, yi, rdx, rdy, x[j], y[j], r_body))
+                    for q in range(n_near):
+                        j = close[q]
+                        best = min(best, ray_disc(xi, yi, rdx, rdy, x[j], y[j], r_body))
                     if best <= ray_len:
                         hits[r] = best
                         any_hit = True
@@ -979,8 +1040,9 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 if ok and hard and near_box(nx, ny, r_body, box):
                     ok = not disc_hits_quad(nx, ny, r_body, g)
                 if ok:
-                    for j in range(spawned):
-                        if j != i and status[j] != UNSPAWNED and d2[i, j] < touch_reach2:
+                    for q in range(n_near):
+                        j = close[q]
+                        if d2[i, j] < touch_reach2:
                             dx = nx - x[j]
                             dy = ny - y[j]
                             if dx * dx + dy * dy < touch2:
@@ -990,12 +1052,12 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     kappa[i] = 1.0
                     if soft and inside_quad(xi, yi, g):
                         kappa[i] = kappa_soft
-                        acc_soft[i] += step
+                        acc[i, 2] += step
                     x[i] = nx
                     y[i] = ny
                     moved[i] = True
                     blocked[i] = 0
-                    acc_len[i] += step
+                    acc[i, 0] += step
                     if mode[i] == RECONNECT:
                         rc_travel[i] += step
                         if rc_travel[i] >= d_rc:
@@ -1019,13 +1081,10 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 if status[i] != ALIVE:
                     continue
                 mobile = role[i] != B
-                p_out = power_out(p_comp, p_comm, links[i], mobile, p_scan, moved[i], p_move, kappa[i],
-                                  avoiding[i], p_avoid)
                 newreg = region_of(x[i], y[i], g)
-                p_in = p_solar if newreg == REG_R else 0.0
-                exploit = e_exploit if loaded_now[i] else 0.0
-                energy[i] = energy_step(energy[i], e_cap, p_in, p_out, tau, exploit)
-                acc_energy[i] += p_out * tau + exploit
+                energy[i], used = tick_energy(energy[i], pars, newreg == REG_R, mobile, links[i], moved[i], kappa[i],
+                                              avoiding[i], loaded_now[i])
+                acc[i, 1] += used
                 if energy[i] == 0.0:
                     if take(table, sup, i, EV_DEPLETED):
                         status[i] = DEAD
@@ -1037,36 +1096,15 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     visited_r[i] = True
                 old = reg[i]
                 if old != newreg:
-                    if old != NO_REGION:
-                        last_left[i] = old
-                        tick_left[i] = k
-                        role_left[i] = role[i]
-                        acc_len[i] = 0.0
-                        acc_energy[i] = 0.0
-                        acc_soft[i] = 0.0
+                    trips, n_trips = region_change(i, k, old, newreg, role[i], last_left, tick_left, role_left, acc,
+                                                   trips, n_trips, run_id)
                     if newreg != NO_REGION:
-                        if last_left[i] != NO_REGION and last_left[i] != newreg:
-                            trips = _room(trips, n_trips, 1)
-                            row_t = trips[n_trips]
-                            row_t[TR_RUN] = run_id
-                            row_t[TR_ORIGIN] = last_left[i]
-                            row_t[TR_DEST] = newreg
-                            row_t[TR_TICK_LEFT] = tick_left[i]
-                            row_t[TR_TICK_ENTERED] = k
-                            row_t[TR_LENGTH] = acc_len[i]
-                            row_t[TR_ENERGY] = acc_energy[i]
-                            row_t[TR_SOFT] = acc_soft[i]
-                            row_t[TR_ROLE_LEFT] = role_left[i]
-                            row_t[TR_ROLE_ENTERED] = role[i]
-                            row_t[TR_ROBOT] = i
-                            n_trips += 1
-                        last_left[i] = NO_REGION
                         if newreg == REG_T and t_first[0] < 0:
                             t_first[0] = k
-                            milestone = LABEL_FIRST_T
+                            milestones |= 1 << LABEL_FIRST_T
                         elif newreg == REG_R and t_first[1] < 0:
                             t_first[1] = k
-                            milestone = LABEL_FIRST_R
+                            milestones |= 1 << LABEL_FIRST_R
                     reg[i] = newreg
 
             # 8. beacon windows (section 6), decay and revert (row D, 7.3)
@@ -1083,17 +1121,11 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 for q in range(3):
                     weight[i, q] = beacon_weight(omega[i, q], bsoc[i, q], binit[i, q], rho_f, rho_c, wform)
                 if decays and take(table, sup, i, EV_REVERT):
-                    role[i] = s_prev[i]
+                    role[i] = ROLE_OF_STATE[sup[i, 0]]     # s_prev, remembered by the beacon state
                     mode[i] = RECONNECT
                     n_failed[i] += 1
                     rc_travel[i] = 0.0
-                    for q in range(3):
-                        omega[i, q] = 0.0
-                        bvx[i, q] = 0.0
-                        bvy[i, q] = 0.0
-                        bsoc[i, q] = 0.0
-                        binit[i, q] = False
-                        weight[i, q] = 0.0
+                    clear_memory(i, omega, bvx, bvy, bsoc, binit, weight)
                     if take(table, sup, i, EV_TURN_AROUND):
                         theta_a[i] = wrap(theta[i] + PI)
                         theta[i] = theta_a[i]
@@ -1154,12 +1186,13 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 rec[TS_SOC_MOBILE] = soc_m
                 rec[TS_SOC_MIN_BEACON] = soc_min if counts[1] > 0 else np.nan
                 rec[TS_UNITS_BEACONS] = units_b
-                _alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
+                alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
                 for q in range(3):
                     rec[TS_ALIGN + q] = align[q]
-            if milestone >= 0:
-                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, milestone, k, n, status, role, mode, x, y,
-                                           theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+            for label in (LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5):
+                if milestones & (1 << label):
+                    snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, label, k, n, status, role, mode, x, y,
+                                               theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
             if k % snap_every == 0:
                 snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
                                            y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
@@ -1191,7 +1224,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
         sm[SM_BEACONS] = n_b
         sm[SM_MOBILE] = n_m
         sm[SM_UNITS_BEACONS] = units_b
-        _alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
+        alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
         for q in range(3):
             sm[SM_ALIGN + q] = align[q]
             sm[SM_ALIGN_W + q] = align_w[q]

@@ -253,6 +253,7 @@ _LIMIT_FIXES = {"robot_ticks": (("runs", "duration_s", "tau", "n_robots"), "lowe
                 "trip_rows": (("runs", "n_robots", "duration_s", "v0", "layout_scale"),
                               "lower runs, n_robots, duration_s or v0")}
 
+
 def _factors(p: LunarParams) -> dict[str, str]:
     """What each of :data:`RUN_LIMITS` counts, in ``p``'s numbers."""
     return {"robot_ticks": f"runs {p.runs} x {p.ticks:,} ticks x {p.n_robots} robots",

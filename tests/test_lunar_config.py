@@ -297,8 +297,11 @@ def test_the_core_experiments_plan_their_conditions(tmp_path, capsys):
     capsys.readouterr()
 
 
-def test_the_sensitivity_sweep_runs_each_variant_over_the_e4_conditions():
+def test_the_sensitivity_sweep_runs_each_variant_over_the_e4_conditions(tmp_path, capsys):
     sweep = sw.load_sweep(SWEEPS / "lunar-e4.toml")
+    assert cli.main(["sweep", "plan", "lunar-e4", "--results", str(tmp_path)]) == 0
+    assert "#SBATCH --array=0-79\n" in (tmp_path / "lunar-e4" / "lunar-e4.sbatch").read_text()
+    capsys.readouterr()
     defaults = SCENARIO.load(None)
     conditions = [(layout, 10.0) for layout in E1] + [("SOFT-RT", 7.5), ("SOFT-RT", 12.5)]
     variants = {}

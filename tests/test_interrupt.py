@@ -125,7 +125,7 @@ RUN_ARGS = ["run", str(CONFIGS / "replenishment.toml"), "--set", "trials=2000"]
     pytest.param(RUN_ARGS, id="replenishment"),
     pytest.param(["run", "--set", "horizon_weeks=90", "--set", "n_uavs=100"], id="delivery"),
     pytest.param(["run", str(CONFIGS / "items.toml"), "--set", "trials=70000"], id="items"),
-    pytest.param(["run", str(CONFIGS / "lunar.toml"), "--set", "runs=700"], id="lunar"),  # minutes of work
+    pytest.param(["run", str(CONFIGS / "lunar.toml"), "--set", "runs=140"], id="lunar"),  # minutes of work
 ])
 def test_ctrl_c_in_a_compiled_kernel_is_a_clean_interruption(args, tmp_path):
     process = _start([*args, "--out", str(tmp_path / "out")], tmp_path)

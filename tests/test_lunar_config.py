@@ -172,10 +172,13 @@ def test_hostile_set_values_are_refused_in_one_line_and_nothing_is_written(tmp_p
     (["rate_window_s=0.01"], ("records.rate_window_s", "shorter than one tick")),
     (["duration_s=1", "tau=1", "v0=0.1"], ()),  # one tick of one second: allowed
     (["first_run=1000000000", "runs=2"], ("go beyond run index",)),
+    (["runs=147"], ("could hold up to", "trip-rows", "1,364 trips a robot can make", "3.3 m between regions")),
+    (["v0=20", "r_body=1", "tau=0.05", "runs=10"], ("trip-rows", "lower runs, n_robots, duration_s or v0")),
+    (["runs=146"], ()),
 ])
 def test_runs_too_large_or_undefined_are_refused_before_any_work(overrides, fragments):
     if not fragments:
-        assert SCENARIO.load(None, overrides).ticks == 1
+        assert SCENARIO.load(None, overrides)
         return
     with pytest.raises(ConfigError) as error:
         SCENARIO.load(None, overrides)
@@ -185,11 +188,14 @@ def test_runs_too_large_or_undefined_are_refused_before_any_work(overrides, frag
 def test_the_limits_hold_the_documented_numbers():
     size = lunar.run_size(SCENARIO.load(None))
     assert size == {"robot_ticks": 50 * 56_250 * 50, "pair_ticks": 50 * 56_250 * 50**2, "records": 50 * 361,
-                    "snapshot_rows": 50 * 50 * 16}
-    assert lunar.RUN_LIMITS == {"robot_ticks": 2e9, "pair_ticks": 1e11, "records": 5e6, "snapshot_rows": 1e6}
+                    "snapshot_rows": 50 * 50 * 16, "trip_rows": 50 * 50 * (4500 // 3.3 + 1)}
+    assert lunar.RUN_LIMITS == {"robot_ticks": 2e9, "pair_ticks": 1e11, "records": 5e6, "snapshot_rows": 1e6,
+                                "trip_rows": 1e7}
+    assert math.isclose(lunar.region_gap(SCENARIO.load(None)), 6.3 - 3.0)  # R-T, the closest regions
+    assert math.isclose(lunar.region_gap(SCENARIO.load(None, ["layout_scale=1"])), 8.4 - 3.0)
     assert lunar.run_size(SCENARIO.load(None, ["frames=true"]))["snapshot_rows"] == 942_500
     text = LUNAR.read_text()
-    assert "<= 2e9" in text and "<= 1e11" in text and "<= 5e6" in text and "<= 1e6" in text
+    assert "<= 2e9" in text and "<= 1e11" in text and "<= 5e6" in text and "<= 1e6" in text and "<= 1e7" in text
 
 
 @pytest.mark.parametrize("text, fragments", [
@@ -291,8 +297,11 @@ def test_the_core_experiments_plan_their_conditions(tmp_path, capsys):
     capsys.readouterr()
 
 
-def test_the_sensitivity_sweep_runs_each_variant_over_the_e4_conditions():
+def test_the_sensitivity_sweep_runs_each_variant_over_the_e4_conditions(tmp_path, capsys):
     sweep = sw.load_sweep(SWEEPS / "lunar-e4.toml")
+    assert cli.main(["sweep", "plan", "lunar-e4", "--results", str(tmp_path)]) == 0
+    assert "#SBATCH --array=0-79\n" in (tmp_path / "lunar-e4" / "lunar-e4.sbatch").read_text()
+    capsys.readouterr()
     defaults = SCENARIO.load(None)
     conditions = [(layout, 10.0) for layout in E1] + [("SOFT-RT", 7.5), ("SOFT-RT", 12.5)]
     variants = {}

@@ -228,7 +228,7 @@ def test_a_replenishment_run_made_with_another_config_is_refused_not_mixed(tmp_p
         assert len(err.splitlines()) == 1 and "was made with another config (ticks 200 vs 300)" in err
 
 
-@pytest.mark.parametrize("name", ["replenishment", "items"])  # delivery's: test_sweep.py (smoke.toml)
+@pytest.mark.parametrize("name", ["replenishment", "items", "lunar"])  # delivery's: test_sweep.py (smoke.toml)
 def test_job_array_tasks_and_dask_write_the_dataset_of_a_local_run(name, tmp_path, monkeypatch, capsys, no_array):
     path = write(tmp_path, TINY[name])
     tables = scenarios.SCENARIOS[name].tables

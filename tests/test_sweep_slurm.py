@@ -86,7 +86,7 @@ def test_the_job_array_writes_the_dataset_of_a_local_run(slurm, tmp_path, monkey
     assert len(table_files(local)) == len(TABLES) * 8
 
 
-@pytest.mark.parametrize("name", ["replenishment", "items"])
+@pytest.mark.parametrize("name", ["replenishment", "items", "lunar"])
 def test_a_job_array_of_another_scenario_writes_the_dataset_of_a_local_run(name, slurm, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     path = tmp_path / "tiny.toml"

@@ -46,6 +46,7 @@ import numpy as np
 from ..config import SCENARIO_KEY, ConfigError, Sections, _show, _suggest, with_sources
 from ..console import counted
 from ..contract import Field
+from .layout import build
 from .params import LAYOUTS, OPTIONS, LunarParams
 
 if TYPE_CHECKING:
@@ -159,8 +160,10 @@ KEYS: dict[str, Key] = {
 #: ticks x robots^2 (sensing and communication between robots: 7e9 at the defaults);
 #: ``records``: rows of the time series (runs x (ticks / n_T + 1)); ``snapshot_rows``: rows of the
 #: snapshots table (runs x robots x snapshots per run; the defaults with ``frames = true`` make
-#: 9.4e5, about 250 MB while built).
-RUN_LIMITS = {"robot_ticks": 2e9, "pair_ticks": 1e11, "records": 5e6, "snapshot_rows": 1e6}
+#: 9.4e5, about 250 MB while built); ``trip_rows``: the most trip records the runs can hold, each
+#: robot driving the shortest gap between two regions for every trip (runs x robots x (v0 T_run /
+#: gap + 1); 3.4e6 at the defaults, ~400 MB, where a run of 50 records a few hundred per run).
+RUN_LIMITS = {"robot_ticks": 2e9, "pair_ticks": 1e11, "records": 5e6, "snapshot_rows": 1e6, "trip_rows": 1e7}
 #: Milestone snapshots of a run besides the periodic ones: first_T, first_R, first_row5, end.
 MILESTONES = 4
 
@@ -219,12 +222,25 @@ def snapshots_per_run(params: LunarParams) -> int:
     return count + (params.ticks // params.n_T + 1 if params.frames else 0)
 
 
+def region_gap(params: LunarParams) -> float:
+    """The shortest distance between the edges of two regions [m]: what a trip's robot drives at least."""
+    layout = build(params)
+    centres, radii = layout.centres, layout.radii
+    return min(math.dist(centres[a], centres[b]) - radii[a] - radii[b] for a in centres for b in centres if a < b)
+
+
+def trips_per_robot(params: LunarParams) -> int:
+    """Most trip records one robot of a run can make: one per shortest gap it can drive, and its first."""
+    return math.floor(params.ticks * params.v0 * params.tau / region_gap(params)) + 1
+
+
 def run_size(params: LunarParams) -> dict[str, float]:
     """The work and memory of a run as :data:`RUN_LIMITS` counts them."""
     run_ticks = params.runs * params.ticks
     return {"robot_ticks": run_ticks * params.n_robots, "pair_ticks": run_ticks * params.n_robots ** 2,
             "records": params.runs * (params.ticks // params.n_T + 1),
-            "snapshot_rows": params.runs * params.n_robots * snapshots_per_run(params)}
+            "snapshot_rows": params.runs * params.n_robots * snapshots_per_run(params),
+            "trip_rows": params.runs * params.n_robots * trips_per_robot(params)}
 
 
 #: Each limit of :data:`RUN_LIMITS`: the keys it depends on, and what brings it down.
@@ -233,14 +249,19 @@ _LIMIT_FIXES = {"robot_ticks": (("runs", "duration_s", "tau", "n_robots"), "lowe
                 "records": (("runs", "duration_s", "tau", "update_interval_s"),
                             "lower runs or duration_s, or raise update_interval_s"),
                 "snapshot_rows": (("runs", "n_robots", "snapshot_every_s", "frames"),
-                                  "lower runs or n_robots, raise snapshot_every_s, or set frames = false")}
+                                  "lower runs or n_robots, raise snapshot_every_s, or set frames = false"),
+                "trip_rows": (("runs", "n_robots", "duration_s", "v0", "layout_scale"),
+                              "lower runs, n_robots, duration_s or v0")}
+
 
 def _factors(p: LunarParams) -> dict[str, str]:
     """What each of :data:`RUN_LIMITS` counts, in ``p``'s numbers."""
     return {"robot_ticks": f"runs {p.runs} x {p.ticks:,} ticks x {p.n_robots} robots",
             "pair_ticks": f"runs {p.runs} x {p.ticks:,} ticks x {p.n_robots}^2 robot pairs",
             "records": f"runs {p.runs} x {p.ticks // p.n_T + 1:,} records per run",
-            "snapshot_rows": f"runs {p.runs} x {p.n_robots} robots x {snapshots_per_run(p):,} snapshots per run"}
+            "snapshot_rows": f"runs {p.runs} x {p.n_robots} robots x {snapshots_per_run(p):,} snapshots per run",
+            "trip_rows": f"runs {p.runs} x {p.n_robots} robots x {trips_per_robot(p):,} trips a robot can make, "
+                         f"driving {p.v0:g} m/s for {p.duration_s:g} s with {region_gap(p):.3g} m between regions"}
 
 
 def validate(params: LunarParams) -> None:
@@ -262,7 +283,8 @@ def validate(params: LunarParams) -> None:
     for limit, most in RUN_LIMITS.items():
         if size[limit] > most:
             keys, fix = _LIMIT_FIXES[limit]
-            raise ConfigError(f"the run would hold ~{size[limit]:.3g} {limit.replace('_', '-')} "
+            holds = "could hold up to" if limit == "trip_rows" else "would hold"  # a bound, not an estimate
+            raise ConfigError(f"the run {holds} ~{size[limit]:.3g} {limit.replace('_', '-')} "
                               f"({_factors(p)[limit]}); at most {most:g}: {fix}", keys)
 
 

@@ -331,3 +331,42 @@ def test_a_milestone_the_run_never_reached_is_an_empty_field_saying_so(tmp_path)
     texts = [text.get_text() for ax in kept["fig"].axes for text in ax.texts]
     assert "not reached in this run" in texts
 
+
+
+@pytest.fixture(scope="module")
+def quick_fig07(tmp_path_factory):
+    """``reproduce lunar-fig07 --quick`` with the real simulator: the results root."""
+    from dronefleet import cli
+
+    out = tmp_path_factory.mktemp("lunar-quick")
+    assert cli.main(["reproduce", "lunar-fig07", "--quick", "--jobs", "1", "--out", str(out)]) == 0
+    return out
+
+
+def test_reproduce_quick_writes_the_tables_and_check_finds_them_identical(quick_fig07):
+    from dronefleet import cli
+
+    d = quick_fig07 / "quick" / "lunar-fig07"
+    for name in ("runs", "timeseries", "curves", "stats"):
+        assert (d / f"{name}.parquet").is_file(), name
+    for suffix in ("png", "pdf", "svg"):
+        assert (d / f"lunar-fig07.{suffix}").stat().st_size > 0
+    runs = pd.read_parquet(d / "runs.parquet")
+    assert len(runs) == 3 * study.QUICK_CHANGES["runs"] and (runs["resources"] > 0).all()
+    # exit 0: every value re-derived and re-run identical (1: a line per difference)
+    assert cli.main(["reproduce", "lunar-fig07", "--quick", "--check", "--out", str(quick_fig07)]) == 0
+
+
+def test_a_tampered_table_is_refused_in_one_line_by_redraw(quick_fig07, tmp_path, capsys):
+    from dronefleet import cli
+
+    copy = tmp_path / "root"
+    shutil.copytree(quick_fig07, copy)
+    runs = copy / "quick" / "lunar-fig07" / "runs.parquet"
+    table = pd.read_parquet(runs)
+    table.loc[2, "layout"] = "MOON"
+    table.to_parquet(runs, index=False)
+    capsys.readouterr()
+    assert cli.main(["reproduce", "lunar-fig07", "--quick", "--redraw", "--out", str(copy)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dronefleet: error: ") and err.count("\n") == 1 and str(runs) in err and "'MOON'" in err

@@ -28,7 +28,8 @@ __all__ = ["xoshiro_step", "next_u64", "lane_u64", "unit", "uniform", "normal_pa
 
 @njit(cache=True)
 def _rotl(x, k):
-    return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
+    """x (uint64) rotated left by k (uint64, not a literal int: one specialisation for all k)."""
+    return (x << k) | (x >> (np.uint64(64) - k))
 
 
 @njit(cache=True)
@@ -38,11 +39,11 @@ def xoshiro_step(s0, s1, s2, s3):
     The multiplications by 5 and 9 are written as shifts and adds (the same bits), so that a
     loop over independent streams vectorises on CPUs without a 64-bit vector multiply (AVX2).
     """
-    r = _rotl((s1 << np.uint64(2)) + s1, 7)
+    r = _rotl((s1 << np.uint64(2)) + s1, np.uint64(7))
     result = (r << np.uint64(3)) + r
     s2 = s2 ^ s0
     s3 = s3 ^ s1
-    return result, s0 ^ s3, s1 ^ s2, s2 ^ (s1 << np.uint64(17)), _rotl(s3, 45)
+    return result, s0 ^ s3, s1 ^ s2, s2 ^ (s1 << np.uint64(17)), _rotl(s3, np.uint64(45))
 
 
 @njit(cache=True, inline='always')

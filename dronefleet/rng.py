@@ -20,23 +20,30 @@ from .jit import njit
 __all__ = ["xoshiro_step", "next_u64", "lane_u64", "unit", "uniform", "normal_pair", "seed_stream", "spawn_states"]
 
 
-@njit(cache=True, inline='always')
+# Compile time: the helpers on scalars (_rotl, xoshiro_step, unit) are plain compiled functions,
+# compiled once and inlined by LLVM; inline='always' makes numba type a function's body again at
+# every call site, with its own inline callees, so it is kept for the functions taking the state
+# array (a call of one would cost reference counting per draw).
+
+
+@njit(cache=True)
 def _rotl(x, k):
-    return (x << np.uint64(k)) | (x >> np.uint64(64 - k))
+    """x (uint64) rotated left by k (uint64, not a literal int: one specialisation for all k)."""
+    return (x << k) | (x >> (np.uint64(64) - k))
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def xoshiro_step(s0, s1, s2, s3):
     """One xoshiro256** step of the state words (uint64): (output, next s0, s1, s2, s3).
 
     The multiplications by 5 and 9 are written as shifts and adds (the same bits), so that a
     loop over independent streams vectorises on CPUs without a 64-bit vector multiply (AVX2).
     """
-    r = _rotl((s1 << np.uint64(2)) + s1, 7)
+    r = _rotl((s1 << np.uint64(2)) + s1, np.uint64(7))
     result = (r << np.uint64(3)) + r
     s2 = s2 ^ s0
     s3 = s3 ^ s1
-    return result, s0 ^ s3, s1 ^ s2, s2 ^ (s1 << np.uint64(17)), _rotl(s3, 45)
+    return result, s0 ^ s3, s1 ^ s2, s2 ^ (s1 << np.uint64(17)), _rotl(s3, np.uint64(45))
 
 
 @njit(cache=True, inline='always')
@@ -56,7 +63,7 @@ def lane_u64(lanes, j):
     return result
 
 
-@njit(cache=True, inline='always')
+@njit(cache=True)
 def unit(bits):
     """The uniform double in [0, 1) of a uint64's top 53 bits."""
     return np.float64(bits >> np.uint64(11)) * (1.0 / 9007199254740992.0)

@@ -11,6 +11,7 @@ import pyarrow as pa
 import pytest
 
 from dronefleet.records import arrow_array, arrow_table
+from dronefleet.supervisor import load_supervisor
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
@@ -111,3 +112,16 @@ def test_the_script_waits_for_a_thread_still_working_as_the_usual_exit_does():
                           text=True, timeout=120)
     assert done.returncode == 2, done.stderr
     assert done.stdout.splitlines()[:2] == ["thread done", "atexit handler ran"]
+
+
+def test_the_packaged_controller_is_read_once_per_process_not_once_per_run(monkeypatch):
+    from dronefleet.delivery import simulation
+    from dronefleet.delivery.config import default_config, replace
+
+    reads = []
+    monkeypatch.setattr(simulation, "load_supervisor", lambda path: reads.append(path) or load_supervisor(path))
+    simulation._packaged_supervisor.cache_clear()
+    config = replace(default_config(), horizon_weeks=0.01, n_uavs=3)
+    for seed in (0, 1):
+        simulation.initial_state(replace(config, seed=seed))
+    assert reads == [simulation.BUILTIN_CONTROLLER]

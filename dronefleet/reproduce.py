@@ -521,19 +521,20 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
     _check_theta(study, figures, redraw)
     probe_folders([study.root])  # a root under a file or not writable: one line, not a traceback at the first run
     owners = {figure: owner(figure) for figure in figures}
-    if not redraw:
-        for each in dict.fromkeys(owners.values()):
-            each.run_together(study, [figure for figure in figures if owners[figure] is each])
     drawn = {}
-    for figure in figures:
-        start = time.perf_counter()
-        log(f"{figure}{' (quick)' if quick else ''}:")
+    with executors.reused_workers():  # every sweep and batch on the same workers: each loads its kernels once
         if not redraw:
-            owners[figure].tidy(study, figure)
-        with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
-            drawn[figure] = owners[figure].draw(study, figure)
-        log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
-            f"({time.perf_counter() - start:.1f} s)")
+            for each in dict.fromkeys(owners.values()):
+                each.run_together(study, [figure for figure in figures if owners[figure] is each])
+        for figure in figures:
+            start = time.perf_counter()
+            log(f"{figure}{' (quick)' if quick else ''}:")
+            if not redraw:
+                owners[figure].tidy(study, figure)
+            with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
+                drawn[figure] = owners[figure].draw(study, figure)
+            log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
+                f"({time.perf_counter() - start:.1f} s)")
     return drawn
 
 

@@ -526,16 +526,31 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
         if not redraw:
             for each in dict.fromkeys(owners.values()):
                 each.run_together(study, [figure for figure in figures if owners[figure] is each])
-        for figure in figures:
-            start = time.perf_counter()
-            log(f"{figure}{' (quick)' if quick else ''}:")
-            if not redraw:
+            for figure in figures:
+                start = time.perf_counter()
+                log(f"{figure}{' (quick)' if quick else ''}:")
                 owners[figure].tidy(study, figure)
-            with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
-                drawn[figure] = owners[figure].draw(study, figure)
-            log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
-                f"({time.perf_counter() - start:.1f} s)")
-    return drawn
+                log(f"  {figure}: tables written in {study.root / figure} ({time.perf_counter() - start:.1f} s)")
+        # Each figure is drawn from its tables alone, so the figures are drawn side by side, one per process.
+        tasks = [(out, quick, theta, figure) for figure in figures]
+        for (*_, figure), result, error in executors.local(_draw, tasks, study.jobs):
+            if error is not None:  # raised in a worker, or the worker died
+                raise error if isinstance(error, (ConfigError, KeyboardInterrupt)) else SweepError(
+                    f"drawing {figure} failed in a worker process: {type(error).__name__}: {error}")
+            drawn[figure], seconds = result
+            log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} ({seconds:.1f} s)")
+    return {figure: drawn[figure] for figure in figures}
+
+
+def _draw(task: tuple[str | os.PathLike, bool, float | None, str]) -> tuple[list[Path], float]:
+    """Draw one figure, here or in a worker process: ``task`` is (results root, quick, theta, figure);
+    returns the paths of its files and the seconds the drawing took."""
+    out, quick, theta, figure = task
+    study = Study(out, quick, jobs=1, theta=theta)
+    start = time.perf_counter()
+    with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
+        paths = owner(figure).draw(study, figure)
+    return paths, time.perf_counter() - start
 
 
 def _same(a, b):

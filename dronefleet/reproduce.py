@@ -64,7 +64,8 @@ from .outputs import probe_folders, writing
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
-from .sweeps import Progress, Run, Sweep, SweepError, available_cpus, dataset, load_sweep, rows, run_sweep
+from .sweeps import (Progress, Run, Sweep, SweepError, available_cpus, dataset, done_runs, load_sweep, rows,
+                     run_sweep)
 
 log = logging.getLogger(__name__)
 
@@ -115,6 +116,7 @@ class Study:
         self.log = log
         self._sweeps = {}
         self._ensured = set()   # sweeps checked (and completed) by this study: figures share them
+        self._done = {}         # sweep -> its done runs, found once (every file of every run inspected)
         self._datasets = {}     # (sweep, table) -> its dataset of done runs, opened once
         self.memo = {}          # results figures share within one reproduce call, by scenario
 
@@ -174,8 +176,10 @@ class Study:
         """Table ``table`` of sweep ``name`` as pandas, with typed grid columns, filtered on ``where``."""
         import pyarrow.compute as pc
 
-        if (name, table) not in self._datasets:  # finding the done runs reads every run's summary
-            self._datasets[name, table] = dataset(self.sweep(name), self.out(name), table)
+        if name not in self._done:  # reads every run's summary and the footers of its other files
+            self._done[name] = done_runs(self.sweep(name), self.out(name))
+        if (name, table) not in self._datasets:
+            self._datasets[name, table] = dataset(self.sweep(name), self.out(name), table, self._done[name])
         data = self._datasets[name, table]
         condition = None
         for key, value in where.items():

@@ -165,6 +165,18 @@ def test_figures_drawn_side_by_side_in_worker_processes_are_the_bytes_drawn_in_o
     assert {path: path.read_bytes() for path in before} == before
 
 
+def test_the_tables_of_one_sweep_inspect_its_runs_files_once(quick, monkeypatch):
+    root, _, _ = quick
+    inspected = []
+    damage = sweeps.damage
+    monkeypatch.setattr(sweeps, "damage", lambda run, out: inspected.append(run) or damage(run, out))
+    study = reproduce.Study(root.parent, quick=True, jobs=1)
+    for table in ("summary", "orders", "fleet"):
+        assert len(study.table("rules", table)) > 0
+    runs = study.sweep("rules").runs
+    assert sorted(run.id for run in inspected) == sorted(run.id for run in runs)  # once each, not once per table
+
+
 def test_redraw_without_tables_says_what_to_run(tmp_path, capsys):
     assert cli.main(["reproduce", "fig17", "--redraw", "--out", str(tmp_path)]) == 2
     assert "run dronefleet reproduce fig17 without --redraw first" in capsys.readouterr().err

@@ -126,6 +126,12 @@ class OrderBook(NamedTuple):
     # the last), so that a scan walks on in O(1) and an allocated order leaves in O(log n).
     queue_tree: np.ndarray  # int64 (n + 1,)
     queue_next: np.ndarray  # int64 (n,), valid for queued orders
+    # The queued orders' features again, packed in no particular order (first counters[QUEUE_LEN]
+    # columns), and where each order sits: a UAV's reach is recomputed by a loop over contiguous
+    # memory, not by a walk along queue_next (a load that waits for the one before).
+    queued_x: np.ndarray    # (2, n): x_distance, x_mass
+    queued_ids: np.ndarray  # int64 (n,): the order in each column
+    queued_pos: np.ndarray  # int64 (n,): the column of each queued order
 
 
 class Fleet(NamedTuple):
@@ -361,10 +367,31 @@ def first_tick_at_or_after(t, interval):
     return k
 
 
-@borrowing
+@borrowing(inline="always")
 def _order_value(coef, i, x_distance, x_mass):
     """The part of UAV ``i``'s decision function that depends on the order (standardised features)."""
     return coef[i, 0] * x_distance + coef[i, 1] * x_mass
+
+
+@borrowing(inline="always")
+def _max_order_value(coef, i, queued_x, n):
+    """The largest :func:`_order_value` of UAV ``i`` over the first ``n`` columns of ``queued_x`` (-inf if none).
+
+    A max is exact, so its order does not matter: four running maxima, so that each step
+    does not wait for the comparison before it.
+    """
+    b0 = b1 = b2 = b3 = -np.inf
+    x0 = queued_x[0]
+    x1 = queued_x[1]
+    whole = n - n % 4
+    for j in range(0, whole, 4):
+        b0 = max(b0, _order_value(coef, i, x0[j], x1[j]))
+        b1 = max(b1, _order_value(coef, i, x0[j + 1], x1[j + 1]))
+        b2 = max(b2, _order_value(coef, i, x0[j + 2], x1[j + 2]))
+        b3 = max(b3, _order_value(coef, i, x0[j + 3], x1[j + 3]))
+    for j in range(whole, n):
+        b0 = max(b0, _order_value(coef, i, x0[j], x1[j]))
+    return max(max(b0, b1), max(b2, b3))
 
 
 @borrowing
@@ -472,6 +499,10 @@ def _enqueue(book, fleet, counters, order):
     reach = fleet.reach
     x0 = book.x_distance[order]
     x1 = book.x_mass[order]
+    book.queued_x[0, n] = x0
+    book.queued_x[1, n] = x1
+    book.queued_ids[n] = order
+    book.queued_pos[order] = n
     for i in range(reach.shape[0]):
         reach[i] = max(reach[i], _order_value(coef, i, x0, x1))
 
@@ -484,7 +515,15 @@ def _dequeue(book, fleet, counters, pos):
     if pos > 0:
         book.queue_next[queued_at(tree, pos - 1)] = book.queue_next[order]
     _tree_add(tree, order, TAKEN_OUT)
-    counters[QUEUE_LEN] -= 1
+    last = counters[QUEUE_LEN] - 1
+    counters[QUEUE_LEN] = last
+    # The last packed column moves into the one the order leaves.
+    k = book.queued_pos[order]
+    moved = book.queued_ids[last]
+    book.queued_x[0, k] = book.queued_x[0, last]
+    book.queued_x[1, k] = book.queued_x[1, last]
+    book.queued_ids[k] = moved
+    book.queued_pos[moved] = k
     coef = fleet.coef
     reach = fleet.reach
     stale = fleet.reach_stale
@@ -535,12 +574,7 @@ def _earliest_bid(book, fleet, counters, params, t):
                            + log((100.0 - fleet.soc_ref[i]) / theta_gap) / params.charge_rate)
             continue
         if fleet.reach_stale[i]:
-            best = -np.inf
-            order = queued_at(book.queue_tree, OLDEST) if counters[QUEUE_LEN] > 0 else -1
-            while order >= 0:
-                best = max(best, _order_value(fleet.coef, i, book.x_distance[order], book.x_mass[order]))
-                order = book.queue_next[order]
-            fleet.reach[i] = best
+            fleet.reach[i] = _max_order_value(fleet.coef, i, book.queued_x, counters[QUEUE_LEN])
             fleet.reach_stale[i] = False
         slack = fleet.reach[i] + fleet.intercept[i]
         w_soc = fleet.coef[i, 2] / params.soc_std

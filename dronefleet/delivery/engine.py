@@ -23,11 +23,10 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, types
 
-from ..jit import borrowing
-
 from .auction import RULE_SIGNATURE, RULES, bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
 from ..fpmath import log
+from ..jit import borrowing
 from .policy import decision, sgd_step
 from ..supervisor import take
 

@@ -136,7 +136,8 @@ def initial_state(config: Config, supervisor: str | os.PathLike | None = None, o
         x_distance=np.ascontiguousarray(features[:, 0]), x_mass=np.ascontiguousarray(features[:, 1]),
         power_w=config_power(config, orders.mass_kg), attempts=np.zeros(n, np.int32),
         delivered_s=np.full(n, np.nan), queue_tree=np.zeros(n + 1, np.int64),
-        queue_next=np.full(n, -1, np.int64))
+        queue_next=np.full(n, -1, np.int64), queued_x=np.zeros((2, n)), queued_ids=np.zeros(n, np.int64),
+        queued_pos=np.zeros(n, np.int64))
     idle_ids = np.argsort(lost, kind="stable").astype(np.int64)  # the idle UAVs first (the lost ones after)
     fleet = engine.Fleet(
         soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,

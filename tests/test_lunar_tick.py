@@ -410,6 +410,19 @@ def test_reconnect_without_contact_ends_after_2_comm_radius_in_a_random_search()
     assert after[0, k.ST_THETA_A] == k.wrap(0.0 + offset(draws(0, 2)[1]))
 
 
+def test_a_random_search_due_is_dropped_with_the_immediate_decision_it_belonged_to():
+    # a robot whose reconnect ended (immediate random search pending) but which is charging by
+    # the time it could decide: the decision is dropped, and after charging (row 6 at tick 2)
+    # its next due decision follows the F_OUT guidance again
+    robots = [mobile(*R_C, role=k.R, mode=k.CHARGING, soc=1.0, countdown=1, immediate=1, search=1),
+              beacon(R_C[0] + 1.0, R_C[1], omega=(1.0, 0, 1.0), vy=(1.0, 0, 0), vx=(0, 0, 1.0))]
+    robots[0][k.ST_ENERGY] = E_CAP - 1.0
+    robots[0][k.ST_SUP] = k.S_R_CHARGING
+    after, summary = run(robots, ticks=2, eps=0.0)
+    assert summary[k.SM_ROWS + 5] == 1
+    assert after[0, k.ST_THETA_A] == pytest.approx(PI / 2) and after[0, k.ST_SEARCH] == 0
+
+
 # ------------------------------------------------------------------ section-17 options
 
 

@@ -124,9 +124,9 @@ LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL
 # Columns of a robot's state in ``run_runs(..., start)`` (a hand-built start, read back at the end).
 (ST_STATUS, ST_SUP, ST_MODE, ST_X, ST_Y, ST_THETA_A, ST_THETA, ST_ENERGY, ST_LOAD, ST_S_C, ST_SOC_REF,
  ST_VISITED_R, ST_N_FAILED, ST_COUNTDOWN, ST_ROLE_K1, ST_ROLE_K2, ST_BLOCKED, ST_BT_BUDGET, ST_BT_TRAVEL,
- ST_RC_TRAVEL, ST_LINKS, ST_AVOIDING, ST_OMEGA, ST_VX, ST_VY, ST_S, ST_INIT) = (
-    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 25, 28, 31, 34)
-N_STATE = 37
+ ST_RC_TRAVEL, ST_LINKS, ST_AVOIDING, ST_OMEGA, ST_VX, ST_VY, ST_S, ST_INIT, ST_IMMEDIATE, ST_SEARCH) = (
+    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 25, 28, 31, 34, 37, 38)
+N_STATE = 39
 
 
 # ------------------------------------------------------------------ small rules (tested alone)
@@ -882,6 +882,8 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
                 role_k2[i] = int(st[ST_ROLE_K2])
                 blocked[i] = int(st[ST_BLOCKED])
                 avoiding[i] = st[ST_AVOIDING] != 0.0
+                immediate[i] = st[ST_IMMEDIATE] != 0.0
+                search[i] = st[ST_SEARCH] != 0.0
                 bt_budget[i] = st[ST_BT_BUDGET]
                 bt_travel[i] = st[ST_BT_TRAVEL]
                 rc_travel[i] = st[ST_RC_TRAVEL]
@@ -1077,6 +1079,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
                     if gx == 0.0 and gy == 0.0:
                         mode[i] = NORMAL
                 elif mode[i] != NORMAL:
+                    search[i] = False              # charging since: no decision left to make random
                     continue
                 if search[i]:                      # a random search: no guidance, both draws taken
                     search[i] = False
@@ -1344,6 +1347,8 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
                 st[ST_RC_TRAVEL] = rc_travel[i]
                 st[ST_LINKS] = links[i]
                 st[ST_AVOIDING] = avoiding[i]
+                st[ST_IMMEDIATE] = immediate[i]
+                st[ST_SEARCH] = search[i]
                 for q in range(3):
                     st[ST_OMEGA + q] = omega[i, q]
                     st[ST_VX + q] = bvx[i, q]

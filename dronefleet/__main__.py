@@ -4,13 +4,14 @@ The command's modules are imported inside :func:`main`, so that a Ctrl-C while t
 a second of numpy, pyarrow and the like) ends like one at any later moment: "interrupted",
 exit code 130, no traceback. SIGTERM (a scheduler ending a job at its time limit, ``kill``)
 stops the command the same way, and it ends with exit code 143 (128 + 15) instead. Once the
-command has ended, both are ignored: the interpreter's exit (up to half a second of tearing
-down numba and pyarrow) has nothing left to stop, and the signal would end the process by
-its default action, without a word, after its work was done.
+command has ended, both are ignored: the process's exit has nothing left to stop, and the
+signal would end the process by its default action, without a word, after its work was done.
+The script then ends the process at once (:func:`script`), without the interpreter's teardown.
 """
 
 import signal
 import sys
+from typing import NoReturn
 
 #: The exit code of a command ended by SIGTERM, as a shell reports a process the signal killed.
 TERMINATED = 128 + signal.SIGTERM
@@ -42,5 +43,13 @@ def main() -> int:
     return TERMINATED if _terminated and code == 130 else code
 
 
+def script() -> NoReturn:
+    """The ``dronefleet`` script and ``python -m dronefleet``: :func:`main`, then the process ends at
+    once, without the interpreter's teardown (:func:`dronefleet.console.exit_now`)."""
+    from .console import exit_now
+
+    exit_now(main())
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    script()

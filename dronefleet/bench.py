@@ -6,8 +6,9 @@ them: compile time, per-run phases, ``--scaling``, ``--big``, ``--process``);
 times a whole sweep (``configs/sweeps/rules.toml``: the 360 runs of Figure 16) as
 ``dronefleet sweep run`` runs it on J local processes, tables written (into a temporary
 directory), after compiling the engine into a fresh cache: wall time and runs per minute;
-``reproduce [--jobs J]`` times a whole ``dronefleet reproduce all`` (every figure of both
-scenarios, warm caches) into a temporary results folder. Without a target, delivery and replenishment run with
+``reproduce [--jobs J]`` times a whole ``dronefleet reproduce all`` (warm caches) into a temporary
+results folder: the deliverable's figures (delivery and replenishment) in one command, each other
+study's after them in one of its own, listed separately. Without a target, delivery and replenishment run with
 their defaults, delivery first. It prints; it asserts nothing.
 
 ``--table FILE [--quick] [--scaling] [--sweep FILE] [--reproduce] [--note TEXT]`` runs delivery,
@@ -33,22 +34,40 @@ from pathlib import Path
 TABLE = "docs/guide/benchmarks-table.md"
 
 
+#: The studies whose figures are the deliverable's: `reproduce` of their figures is timed together,
+#: every other study's (items, ...) on its own after them.
+DELIVERABLE_STUDIES = ("delivery", "replenishment")
+
+
 def bench_reproduce(argv):
-    """Wall time and peak memory of ``dronefleet reproduce all`` run from scratch into a temporary folder."""
+    """Wall time and peak memory of ``dronefleet reproduce all`` run from scratch into a temporary
+    folder: the deliverable's figures (:data:`DELIVERABLE_STUDIES`) in one command, then each other
+    study's figures in one command of their own, listed separately."""
+    from .reproduce import studies
     from .sweeps import available_cpus
 
     parser = argparse.ArgumentParser(prog="python -m dronefleet.bench reproduce")
     parser.add_argument("--jobs", type=int, help="local processes (default: all CPUs)")
     jobs = parser.parse_args(argv).jobs or available_cpus()
+    found = studies()
+    parts = {"the deliverable's figures (" + ", ".join(DELIVERABLE_STUDIES) + ")":
+             [figure for name in DELIVERABLE_STUDIES for figure in found[name].FIGURES],
+             **{f"{name}'s figures": list(study.FIGURES) for name, study in found.items()
+                if name not in DELIVERABLE_STUDIES}}
+    walls = {}
     with tempfile.TemporaryDirectory(prefix="dronefleet-bench-") as results:
-        start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "dronefleet.cli", "reproduce", "all", "--out", results,
-                        "--jobs", str(jobs)], check=True, stdout=subprocess.DEVNULL)
-        wall = time.perf_counter() - start
+        for part, figures in parts.items():
+            start = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "dronefleet.cli", "reproduce", *figures, "--out", results,
+                            "--jobs", str(jobs)], check=True, stdout=subprocess.DEVNULL)
+            walls[part] = time.perf_counter() - start
     peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # KiB on Linux
-    print(f"dronefleet reproduce all (Figs 9-12 and 16-20, warm caches), {jobs} processes: "
-          f"wall time {wall:.1f} s; peak memory of the largest process {peak_mb:.0f} MB")
-    return {"jobs": jobs, "wall_s": wall, "peak_mb": peak_mb}
+    print(f"dronefleet reproduce all (warm caches), {jobs} processes; peak memory of the largest process "
+          f"{peak_mb:.0f} MB")
+    for part, wall in walls.items():
+        print(f"  {part}: wall time {wall:.1f} s")
+    print(f"  all: wall time {sum(walls.values()):.1f} s")
+    return {"jobs": jobs, "wall_s": walls, "peak_mb": peak_mb}
 
 
 def bench_sweep(argv):
@@ -160,8 +179,9 @@ def bench_table(argv):
                   f"{sweep['wall_s']:.1f} s ({60.0 * sweep['runs'] / sweep['wall_s']:.0f} runs per minute)")]
     if args.reproduce:
         whole = bench_reproduce(["--jobs", str(args.jobs)] if args.jobs else [])
-        rows += [(f"`dronefleet reproduce all` (Figs 9-12 and 16-20, warm caches), {whole['jobs']} processes",
-                  f"{whole['wall_s']:.1f} s, largest process {whole['peak_mb']:.0f} MB")]
+        rows += [(f"`dronefleet reproduce` of {part} (warm caches), {whole['jobs']} processes",
+                  f"{wall:.1f} s, largest process {whole['peak_mb']:.0f} MB")
+                 for part, wall in whole["wall_s"].items()]
     load_after = os.getloadavg()[0]
     note = f" {args.note.strip()}" if args.note.strip() else ""
     lines = ["# Benchmark figures", "",

@@ -240,10 +240,10 @@ class Sections:
         return flat
 
     def read(self, defaults: Mapping[str, Any], path: str | os.PathLike | None,
-             overrides: Iterable[str]) -> tuple[dict[str, Any], dict[str, str]]:
+             overrides: Iterable[str], seed: int | None = None) -> tuple[dict[str, Any], dict[str, str]]:
         """``(values, origin)``: ``defaults`` < the file at ``path`` < ``overrides`` (``"key=value"``,
-        in order, all parsed before the file is read), and where each value that is not a
-        default came from."""
+        in order, all parsed before the file is read) < ``seed`` (the ``seed`` key, when given),
+        and where each value that is not a default came from."""
         parsed = [(_parse_override(o, self.resolve_key), o) for o in overrides]
         values, origin = dict(defaults), {}
         if path is not None:
@@ -251,7 +251,17 @@ class Sections:
         for (name, value), text in parsed:
             values[name] = value
             origin[name] = f"--set {text}"
+        if seed is not None:
+            values["seed"], origin["seed"] = seed, "--seed"
         return values, origin
+
+    def changed(self, current: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
+        """``current`` (every key's value) with ``changes`` applied; an unknown key in ``changes``
+        is refused (ConfigError naming it)."""
+        for name in changes:
+            if name not in self.schema:
+                raise self.unknown_key(str(name))
+        return {**current, **changes}
 
 
 def with_sources(error: ConfigError, origin: Mapping[str, str]) -> ConfigError:

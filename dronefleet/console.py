@@ -14,12 +14,15 @@ shown (``-q`` gets none). :func:`compile_notice` says when numba compiles, and o
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import logging
+import os
 import sys
+import threading
 import time
 from collections.abc import Iterator
-from typing import Any
+from typing import Any, NoReturn
 
 #: The logger every module's logger descends from.
 LOGGER = "dronefleet"
@@ -146,3 +149,26 @@ def compile_notice(what: str) -> Iterator[None]:
 
     with event.install_listener("numba:compile", Notice()):
         yield
+
+
+def exit_now(code: int) -> NoReturn:
+    """End the process of a finished command with exit code ``code``, skipping the interpreter's
+    teardown.
+
+    Tearing down, Python frees every module's objects one by one, numba's compiled code and
+    LLVM state among them: 0.2 s of CPU after a run, a fifth of a whole ``dronefleet run``, for
+    memory the system takes back at once anyway. What an exit does that has effects is kept:
+    the atexit handlers (logging's last flush, temporary folders' removal) run, and stdout and
+    stderr are flushed. With a thread other than daemons still running, or output that cannot be
+    flushed (a reader gone), the usual exit happens instead, with its usual behaviour.
+    """
+    if any(thread is not threading.main_thread() and not thread.daemon for thread in threading.enumerate()):
+        sys.exit(code)
+    try:
+        atexit._run_exitfuncs()  # what the usual exit runs (logging.shutdown, weakref finalizers)
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:
+                stream.flush()
+    except BaseException:  # a handler that fails, a closed pipe: as the usual exit reports it
+        sys.exit(code)
+    os._exit(code)

@@ -31,6 +31,9 @@ _PARENT_POLL_S = 1.0
 #: How long `dask` waits for the scheduler to answer before giving up (s).
 SCHEDULER_TIMEOUT_S = 10.0
 
+#: Idle workers of :func:`local` kept for its next call, within :func:`reused_workers`; None outside.
+_kept: list | None = None
+
 Item = TypeVar("Item")
 Result = TypeVar("Result")
 #: What an executor yields per item: ``(item, result, None)`` or ``(item, None, error)``.
@@ -112,6 +115,26 @@ def _watch_parent(parent):
     os._exit(1)
 
 
+@contextlib.contextmanager
+def reused_workers() -> Iterator[None]:
+    """Within the block, the worker processes of :func:`local` outlive its call: a later call's
+    items go to the workers an earlier one left idle, which have their modules imported and
+    their compiled kernels loaded already (a second of CPU per worker, once per command rather
+    than once per sweep). The kept workers end at the block's end; nested, the outer block's
+    end ends them."""
+    global _kept
+    if _kept is not None:
+        yield
+        return
+    _kept = []
+    try:
+        yield
+    finally:
+        pools, _kept = _kept, None
+        for pool in pools:
+            pool.shutdown()
+
+
 def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) -> Outcomes[Item, Result]:
     """``function`` over ``items`` on ``jobs`` processes of this machine.
 
@@ -127,8 +150,9 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
     Each worker is a pool of its own that holds one item at a time. A process pool whose
     worker dies (killed, out of memory, segfault) fails every item it holds with
     ``BrokenProcessPool``; holding one, it names the item that killed it exactly, and only
-    that worker is replaced, so the other items run on unaffected. Workers end when this
-    process dies, even by SIGKILL (see :func:`_die_with_parent`).
+    that worker is replaced, so the other items run on unaffected. Workers end with the call, or
+    within :func:`reused_workers` are kept for the next, and end when this process dies, even by
+    SIGKILL (see :func:`_die_with_parent`).
 
     Ctrl-C (KeyboardInterrupt here) is passed on to the workers (the terminal sends it to them
     too, but ``kill -INT`` does not), whose items stop: the items done are kept, the running
@@ -149,7 +173,15 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
     context = get_context("loky")  # not "loky_init_main", which runs the main module as spawn does
 
     def worker_pool():
+        if _kept:
+            return _kept.pop()
         return ProcessPoolExecutor(1, context=context, initializer=_start_worker, initargs=(os.getpid(),))
+
+    def release(pool):
+        if _kept is None:
+            pool.shutdown()
+        else:
+            _kept.append(pool)
 
     holding = {}  # future -> (its pool, its item)
 
@@ -178,7 +210,7 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
                 if items:
                     submit(pool)  # before the yield: the worker does not wait for the caller
                 else:
-                    pool.shutdown()
+                    release(pool)
                 yield item, result, error
     finally:
         for pool, _ in holding.values():  # on Ctrl-C: stop the items running; the others never start

@@ -19,7 +19,23 @@ import sys
 
 from numba import njit
 
-__all__ = ["njit"]
+__all__ = ["borrowing", "njit"]
+
+
+def borrowing(function=None, **options):
+    """``njit(cache=True)`` without numba's reference counting, for kernels that borrow their arrays.
+
+    A kernel that allocates nothing and reads and writes only arrays its caller holds for the
+    whole call needs no reference counts: numba's would incref and decref every array a call
+    passes (each an atomic operation; the delivery engine passes ~57 per call in its state
+    tuples), and its pruning cannot remove them around a call of another kernel. That was
+    28-31 % of the paper run (docs/guide/benchmarks.md). numba compiles its own hot string helpers
+    the same way (``_nrt=False``). Such a kernel must not allocate: numba then refuses it when
+    compiling. The functions it calls inherit the setting; one that allocates (a sort) must be
+    compiled with ``_nrt=True`` said explicitly (see ``delivery.engine._sort``).
+    """
+    return njit(function, cache=True, _nrt=False, **options)
+
 
 if "scipy.linalg" not in sys.modules and "numba.np.arraymath" not in sys.modules:
     sys.modules["scipy.linalg"] = None  # an import of it now raises ImportError, which numba catches

@@ -64,7 +64,8 @@ from .outputs import probe_folders, writing
 from .replenishment import study as replenishment
 from .provenance import stamp
 from .records import write_atomic
-from .sweeps import Progress, Run, Sweep, SweepError, available_cpus, dataset, load_sweep, rows, run_sweep
+from .sweeps import (Progress, Run, Sweep, SweepError, available_cpus, dataset, done_runs, load_sweep, rows,
+                     run_sweep)
 
 log = logging.getLogger(__name__)
 
@@ -115,6 +116,7 @@ class Study:
         self.log = log
         self._sweeps = {}
         self._ensured = set()   # sweeps checked (and completed) by this study: figures share them
+        self._done = {}         # sweep -> its done runs, found once (every file of every run inspected)
         self._datasets = {}     # (sweep, table) -> its dataset of done runs, opened once
         self.memo = {}          # results figures share within one reproduce call, by scenario
 
@@ -174,8 +176,10 @@ class Study:
         """Table ``table`` of sweep ``name`` as pandas, with typed grid columns, filtered on ``where``."""
         import pyarrow.compute as pc
 
-        if (name, table) not in self._datasets:  # finding the done runs reads every run's summary
-            self._datasets[name, table] = dataset(self.sweep(name), self.out(name), table)
+        if name not in self._done:  # reads every run's summary and the footers of its other files
+            self._done[name] = done_runs(self.sweep(name), self.out(name))
+        if (name, table) not in self._datasets:
+            self._datasets[name, table] = dataset(self.sweep(name), self.out(name), table, self._done[name])
         data = self._datasets[name, table]
         condition = None
         for key, value in where.items():
@@ -521,20 +525,36 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
     _check_theta(study, figures, redraw)
     probe_folders([study.root])  # a root under a file or not writable: one line, not a traceback at the first run
     owners = {figure: owner(figure) for figure in figures}
-    if not redraw:
-        for each in dict.fromkeys(owners.values()):
-            each.run_together(study, [figure for figure in figures if owners[figure] is each])
     drawn = {}
-    for figure in figures:
-        start = time.perf_counter()
-        log(f"{figure}{' (quick)' if quick else ''}:")
+    with executors.reused_workers():  # every sweep and batch on the same workers: each loads its kernels once
         if not redraw:
-            owners[figure].tidy(study, figure)
-        with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
-            drawn[figure] = owners[figure].draw(study, figure)
-        log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} "
-            f"({time.perf_counter() - start:.1f} s)")
-    return drawn
+            for each in dict.fromkeys(owners.values()):
+                each.run_together(study, [figure for figure in figures if owners[figure] is each])
+            for figure in figures:
+                start = time.perf_counter()
+                log(f"{figure}{' (quick)' if quick else ''}:")
+                owners[figure].tidy(study, figure)
+                log(f"  {figure}: tables written in {study.root / figure} ({time.perf_counter() - start:.1f} s)")
+        # Each figure is drawn from its tables alone, so the figures are drawn side by side, one per process.
+        tasks = [(out, quick, theta, figure) for figure in figures]
+        for (*_, figure), result, error in executors.local(_draw, tasks, study.jobs):
+            if error is not None:  # raised in a worker, or the worker died
+                raise error if isinstance(error, (ConfigError, KeyboardInterrupt)) else SweepError(
+                    f"drawing {figure} failed in a worker process: {type(error).__name__}: {error}")
+            drawn[figure], seconds = result
+            log(f"  {figure}: {len(drawn[figure])} files drawn in {study.root / figure} ({seconds:.1f} s)")
+    return {figure: drawn[figure] for figure in figures}
+
+
+def _draw(task: tuple[str | os.PathLike, bool, float | None, str]) -> tuple[list[Path], float]:
+    """Draw one figure, here or in a worker process: ``task`` is (results root, quick, theta, figure);
+    returns the paths of its files and the seconds the drawing took."""
+    out, quick, theta, figure = task
+    study = Study(out, quick, jobs=1, theta=theta)
+    start = time.perf_counter()
+    with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
+        paths = owner(figure).draw(study, figure)
+    return paths, time.perf_counter() - start
 
 
 def _same(a, b):

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from .jit import njit
+from .jit import borrowing
 
 from .config import ConfigError, brief
 
@@ -429,7 +429,7 @@ def load_supervisor(path: str | os.PathLike) -> Automaton:
 # --------------------------------------------------------------------------- kernel
 
 
-@njit(cache=True)
+@borrowing
 def take(table, states, uav, event):
     """Apply event ``event`` to UAV ``uav`` if every local supervisor allows it.
 

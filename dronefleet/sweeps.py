@@ -967,7 +967,7 @@ def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, parti
     ])
 
 
-def _done_runs(sweep: Sweep, out: Path) -> list[Run]:
+def done_runs(sweep: Sweep, out: Path) -> list[Run]:
     """The runs of ``sweep`` that are done in ``out``, in run order; SweepError if none is.
     A damaged run is left out, saying so in one line (``sweep run`` redoes it)."""
     done = []
@@ -1044,7 +1044,7 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     from .provenance import stamp
     from .records import write_atomic
 
-    done = _done_runs(sweep, out)
+    done = done_runs(sweep, out)
     path = out / "collected.parquet"
     check_output_file(path, "the summary table", "move it away or give another --results")
     schema = _partition_schema(sweep)
@@ -1061,7 +1061,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     return table, [run for run in sweep.runs if run not in finished]
 
 
-def dataset(sweep: Sweep, out: str | os.PathLike, table: str) -> pyarrow.dataset.Dataset:
+def dataset(sweep: Sweep, out: str | os.PathLike, table: str,
+            done: Sequence[Run] | None = None) -> pyarrow.dataset.Dataset:
     """``table`` of the sweep's done runs, in the dataset directory ``out`` (``results/<name>``),
     as one ``pyarrow.dataset.Dataset`` whose partition columns have the config's types.
 
@@ -1073,12 +1074,13 @@ def dataset(sweep: Sweep, out: str | os.PathLike, table: str) -> pyarrow.dataset
 
     (Read without a schema, hive partition values come back as strings or int32:
     ``tau_minutes=15.0`` as the string ``"15.0"``.) :func:`rows` reads it, naming a file
-    damaged inside.
+    damaged inside. ``done``: the sweep's done runs (:func:`done_runs`) if the caller found them
+    already, so that several tables of one sweep inspect its runs' files once, not once per table.
     """
     import pyarrow.dataset as ds
 
     out = Path(out)
-    done = _done_runs(sweep, out)
+    done = done_runs(sweep, out) if done is None else done
     return ds.dataset([str(run.path(out, table)) for run in done], format="parquet",
                       partitioning=ds.partitioning(_partition_schema(sweep), flavor="hive"),
                       partition_base_dir=str(out / table))

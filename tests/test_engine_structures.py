@@ -2,8 +2,9 @@
 
 The event heap must pick the UAV ``np.argmin(next_s)`` picks (lowest id among equal
 instants, the first NaN if any); the queue must hold the unallocated orders in ascending
-id order, whatever the order of insertions and removals. A larger fleet's run is compared
-with digests of its tables taken with the engine that used the plain arrays.
+id order, whatever the order of insertions and removals, and its packed copy the same orders.
+A larger fleet's run is compared with digests of its tables taken with the engine that used
+the plain arrays.
 """
 
 import numpy as np
@@ -37,7 +38,9 @@ def test_event_heap_top_is_argmin_with_ties_and_nan(seed):
 
 def _book(n):
     fields = {name: np.zeros(n) for name in engine.OrderBook._fields}
-    fields.update(queue_tree=np.zeros(n + 1, np.int64), queue_next=np.full(n, -1, np.int64))
+    fields.update(x_distance=np.arange(n, dtype=np.float64), x_mass=-np.arange(n, dtype=np.float64),
+                  queue_tree=np.zeros(n + 1, np.int64), queue_next=np.full(n, -1, np.int64),
+                  queued_x=np.zeros((2, n)), queued_ids=np.zeros(n, np.int64), queued_pos=np.zeros(n, np.int64))
     return engine.OrderBook(**fields)
 
 
@@ -76,6 +79,11 @@ def test_queue_keeps_ascending_ids_through_insertions_and_removals(seed):
             reference = sorted(reference + [order])
         assert counters[engine.QUEUE_LEN] == len(reference)
         assert _walk(book, counters) == reference
+        # the packed copy holds the same orders, each with its features and position
+        packed = book.queued_ids[:len(reference)]
+        assert sorted(packed.tolist()) == reference
+        assert np.array_equal(book.queued_pos[packed], np.arange(len(reference)))
+        assert np.array_equal(book.queued_x[:, :len(reference)], np.stack([book.x_distance[packed], book.x_mass[packed]]))
         for k in rng.integers(0, max(len(reference), 1), 3) if reference else []:
             assert engine.queued_at(book.queue_tree, k) == reference[k]
         for last in (-1, int(rng.integers(n))):

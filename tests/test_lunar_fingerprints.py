@@ -32,22 +32,22 @@ RUNS = {
 
 EXPECTED = {
     "hard_nt_options": {
-        "snapshots": "fd7a17e885a709ad986925c65bfb58fbcb37622ba63f2a91f8852d54721341b6",
-        "summary": "d74e7c150de2777b1ad4b3ae7421abecb315ca56bc85f4d9815d6927cfa4f1aa",
-        "timeseries": "45daf83f0528b7c085dea18b0caf6f5e9769bc4ac321b67879a9c9e9dca5b64d",
-        "trips": "96fe7957537de563257296293c15ba715982ea58386e84f2828f4845f3d6c325",
+        "snapshots": "e95451615b763bad65d0ded2e0bf0048d43fcc50abac5fb22fa8ed32d073fb1d",
+        "summary": "08679c0642ddfd80fce31bc91a450998683d05608e4f6b51147c21c8f4dadd98",
+        "timeseries": "83c2cd6cf1605b0a9883a740cf38cdef84610552022cd3bcf518b7fa853b12f7",
+        "trips": "d639a308c01c7c338b03af1c8177ac2eac6b4389312031740f3319dc2a848e16",
     },
     "open_options": {
-        "snapshots": "8da96b05a724f0466f0bd964372994eaf86bb18d200b3ee0677b3f62b3b13cfe",
-        "summary": "f47e9a0920ab72495764e25e7700d3b58a7326bad98487a2f34e7d49dcbb46f1",
-        "timeseries": "05f0198b2e0eaf9c9c27e261096e2bb27ccf4486074222b3faa7511047757fac",
-        "trips": "74c095ddeee00e0dbbad1fdcab48c502708b920ec67378406b496cb011777531",
+        "snapshots": "a04ace463f1dbbf49deccb3eb8b210e144f48310fe873d0fc2a51e08ea91170e",
+        "summary": "69179544948fb6f0ac36ce25816ce73695345a5338c7889094b209e6ca84a281",
+        "timeseries": "49583f56102cafb626e25a247ce72e7d36075752d40a86e221a4bb701265a52b",
+        "trips": "433eddbaf52bd5ae733239f0f1776f5bb6ae89f79d00c39a0f68fa3382469308",
     },
     "soft_rt": {
-        "snapshots": "7c9eaf073974ea4cb7b025cf077687c302f288bc23ffff2fbe6a90a204aba36d",
-        "summary": "7dbe623aed82c36b4fd0a9085d08a371bd2dfe7dadb1a9a8a9790dd330ecaabb",
-        "timeseries": "fdb01f3fa6f1590ed084d95a8587ce08d09b2a1cf19b4ba06f8500334328ce86",
-        "trips": "a5bda8eef5e24f5878d155a128f2452716352288c94b389d316e2dadd10b0f42",
+        "snapshots": "7e1523c784425a78e111832725c07a2f0c4db619d17f542d699cb56f9b5825a0",
+        "summary": "1c020d3e8d2781c1821bc711ede2af4e2ae4ff7301c9ac463160f544ff066cf4",
+        "timeseries": "0134e657c6e5c93dbd57d3940091855d1baf62b81bfbd0c65885ee94884bc4a9",
+        "trips": "3f34a3872a430f3497c4a9ef1808f7e7b823f28add401118ffc0c61874fd89b1",
     },
 }
 

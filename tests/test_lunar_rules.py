@@ -338,16 +338,16 @@ def test_robots_die_at_zero_energy_and_stay_as_obstacles():
 
 
 def trip_state(n=2):
-    return (np.full(n, k.NO_REGION, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64),
-            np.zeros((n, 3)), np.empty((4, k.N_TRIP)))
+    return (np.full(n, k.NO_REGION, dtype=np.int64), np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.int64),
+            np.zeros(n, dtype=np.int64), np.zeros((n, 3)), np.empty((4, k.N_TRIP)))
 
 
 def test_trip_record_from_leaving_one_region_to_entering_another():
-    last_left, tick_left, role_left, acc, trips = trip_state()
-    trips, used = k.region_change(1, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, tick_left, role_left, acc,
+    last_left, voided, tick_left, role_left, acc, trips = trip_state()
+    trips, used = k.region_change(1, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
                                   trips, 0, 7)
     acc[1] += (5.0, 300.0, 0.9)                      # driven, used, of which in the soft patch
-    trips, used = k.region_change(1, 90, k.NO_REGION, k.REG_T, k.F_OUT, last_left, tick_left, role_left, acc,
+    trips, used = k.region_change(1, 90, k.NO_REGION, k.REG_T, k.F_OUT, last_left, voided, tick_left, role_left, acc,
                                   trips, used, 7)
     assert used == 1
     row = trips[0]
@@ -355,28 +355,51 @@ def test_trip_record_from_leaving_one_region_to_entering_another():
         (7, k.REG_N, k.REG_T, 10, 90)
     assert (row[k.TR_LENGTH], row[k.TR_ENERGY], row[k.TR_SOFT], row[k.TR_ROBOT]) == (5.0, 300.0, 0.9, 1)
     # coming back into the region it left is not a trip
-    trips, used = k.region_change(1, 95, k.REG_T, k.NO_REGION, k.F_IN, last_left, tick_left, role_left, acc,
+    trips, used = k.region_change(1, 95, k.REG_T, k.NO_REGION, k.F_IN, last_left, voided, tick_left, role_left, acc,
                                   trips, used, 7)
-    trips, used = k.region_change(1, 99, k.NO_REGION, k.REG_T, k.F_IN, last_left, tick_left, role_left, acc,
+    trips, used = k.region_change(1, 99, k.NO_REGION, k.REG_T, k.F_IN, last_left, voided, tick_left, role_left, acc,
                                   trips, used, 7)
     assert used == 1
 
 
-def test_a_beacon_spell_voids_the_trip_in_progress():
-    last_left, tick_left, role_left, acc, trips = trip_state()
-    n = 2
-    countdown, since = np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64)
+def beacon_spell(robot, n=2):
+    """become_beacon on fresh memory arrays of ``n`` robots (all ones): (countdown, memory arrays)."""
+    countdown = np.zeros(n, dtype=np.int64)
     omega, bvx, bvy, bsoc, weight = (np.ones((n, 3)) for _ in range(5))
     binit, ikey = np.ones((n, 3), dtype=np.bool_), np.zeros((n, n), dtype=np.int64)
-    trips, used = k.region_change(0, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, tick_left, role_left, acc,
+    return countdown, omega, bvx, bvy, bsoc, binit, weight, ikey
+
+
+def test_a_beacon_spell_voids_the_trip_in_progress():
+    last_left, voided, tick_left, role_left, acc, trips = trip_state()
+    countdown, omega, bvx, bvy, bsoc, binit, weight, ikey = beacon_spell(0)
+    trips, used = k.region_change(0, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
                                   trips, 0, 0)
-    k.become_beacon(0, 40, 156, countdown, since, last_left, omega, bvx, bvy, bsoc, binit, weight, ikey)
-    assert countdown[0] == 156 and since[0] == 40
+    k.become_beacon(0, 156, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
+    assert countdown[0] == 156
     assert not omega[0].any() and not binit[0].any() and (ikey[0] == -1).all() and omega[1].all()
     # ... decays later and drives on into T: no N -> T trip spanning the beacon spell
-    trips, used = k.region_change(0, 900, k.NO_REGION, k.REG_T, k.F_OUT, last_left, tick_left, role_left, acc,
+    trips, used = k.region_change(0, 900, k.NO_REGION, k.REG_T, k.F_OUT, last_left, voided, tick_left, role_left, acc,
                                   trips, used, 0)
     assert used == 0
+
+
+def test_a_beacon_spell_inside_a_region_leaves_no_region_to_start_a_trip_from():
+    # a beacon in T decays and drives out of T into R: it has not "last left" T (section 12);
+    # the next trip starts when it leaves R, the region it entered after the spell
+    last_left, voided, tick_left, role_left, acc, trips = trip_state()
+    countdown, omega, bvx, bvy, bsoc, binit, weight, ikey = beacon_spell(0)
+    k.become_beacon(0, 156, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
+    trips, used = k.region_change(0, 900, k.REG_T, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
+                                  trips, 0, 0)
+    trips, used = k.region_change(0, 990, k.NO_REGION, k.REG_R, k.R, last_left, voided, tick_left, role_left, acc,
+                                  trips, used, 0)
+    assert used == 0
+    trips, used = k.region_change(0, 995, k.REG_R, k.NO_REGION, k.R, last_left, voided, tick_left, role_left, acc,
+                                  trips, used, 0)
+    trips, used = k.region_change(0, 999, k.NO_REGION, k.REG_T, k.F_IN, last_left, voided, tick_left, role_left, acc,
+                                  trips, used, 0)
+    assert used == 1 and (trips[0, k.TR_ORIGIN], trips[0, k.TR_TICK_LEFT]) == (k.REG_R, 995)
 
 
 # ------------------------------------------------------------------ alignment diagnostic (section 12)
@@ -441,9 +464,9 @@ def test_a_row_the_supervisor_forbids_does_not_fire():
     runs, seeds = run_seeds(params)
     table = role_table()[0].copy()
     stop = np.zeros(1, np.int8)
-    summary = k.run_runs(opts, pars, geometry, seeds, runs, table, stop)[0]
+    summary = k.run_runs(opts, pars, geometry, seeds, runs, table, np.empty((0, k.N_STATE)), stop)[0]
     # the first robot to leave the nest has no beacon in range anywhere: row 1 fires
     assert summary[0, k.SM_ROWS + 0] > 0 and summary[0, k.SM_BEACONS] > 0
     table[0, :, k.EV_BECOME_BEACON] = -1
-    summary, series = k.run_runs(opts, pars, geometry, seeds, runs, table, stop)[:2]
+    summary, series = k.run_runs(opts, pars, geometry, seeds, runs, table, np.empty((0, k.N_STATE)), stop)[:2]
     assert summary[0, k.SM_ROWS + 0] == 0 and (series[0, :, k.TS_BEACONS] == 0).all()

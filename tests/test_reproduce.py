@@ -156,6 +156,27 @@ def test_redrawing_reads_only_the_parquet_tables(quick, monkeypatch):
     assert {path: path.read_bytes() for path in before} == before  # the same bytes again
 
 
+def test_figures_drawn_side_by_side_in_worker_processes_are_the_bytes_drawn_in_one_process(quick):
+    root, drawn, _ = quick  # drawn with jobs=2: one figure per process, in this one and two workers
+    before = {path: path.read_bytes() for paths in drawn.values() for path in paths}
+    for path in before:
+        path.unlink()
+    assert cli.main(["reproduce", *FIGURES, "--quick", "--redraw", "--jobs", "1", "--out", str(root.parent)]) == 0
+    assert {path: path.read_bytes() for path in before} == before
+
+
+def test_the_tables_of_one_sweep_inspect_its_runs_files_once(quick, monkeypatch):
+    root, _, _ = quick
+    inspected = []
+    damage = sweeps.damage
+    monkeypatch.setattr(sweeps, "damage", lambda run, out: inspected.append(run) or damage(run, out))
+    study = reproduce.Study(root.parent, quick=True, jobs=1)
+    for table in ("summary", "orders", "fleet"):
+        assert len(study.table("rules", table)) > 0
+    runs = study.sweep("rules").runs
+    assert sorted(run.id for run in inspected) == sorted(run.id for run in runs)  # once each, not once per table
+
+
 def test_redraw_without_tables_says_what_to_run(tmp_path, capsys):
     assert cli.main(["reproduce", "fig17", "--redraw", "--out", str(tmp_path)]) == 2
     assert "run dronefleet reproduce fig17 without --redraw first" in capsys.readouterr().err

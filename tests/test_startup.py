@@ -11,6 +11,7 @@ import pyarrow as pa
 import pytest
 
 from dronefleet.records import arrow_array, arrow_table
+from dronefleet.supervisor import load_supervisor
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
@@ -72,3 +73,55 @@ def test_arrow_table_keeps_arrow_columns_and_sets_metadata():
     assert table.column("y").chunk(0).equals(column)
     assert table.schema.metadata == {b"k": b"v"}
     assert table.column("x").type == pa.int64()
+
+
+# The `dronefleet` script's end (dronefleet.__main__.script), with an atexit handler, an object that
+# the interpreter's teardown would finalise, and optionally a (non-daemon) thread still working.
+_SCRIPT_END = """
+import atexit, sys, threading, time
+from dronefleet.__main__ import script
+
+class Held:
+    def __del__(self):
+        print("torn down", flush=True)
+
+held = Held()
+atexit.register(lambda: print("atexit handler ran", flush=True))
+if sys.argv[1] == "thread":
+    threading.Thread(target=lambda: (time.sleep(1.0), print("thread done", flush=True))).start()
+sys.argv = ["dronefleet", *sys.argv[2:]]
+script()
+"""
+
+
+def test_the_script_ends_without_the_teardown_but_after_atexit_and_with_its_output_and_code(tmp_path):
+    missing = tmp_path / "absent.toml"
+    done = subprocess.run([sys.executable, "-c", _SCRIPT_END, "-", "run", str(missing)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and str(missing) in done.stderr, done.stderr
+    assert done.stdout == "atexit handler ran\n"  # and not "torn down": no teardown
+    done = subprocess.run([sys.executable, "-c", _SCRIPT_END, "-", "configs"], capture_output=True, text=True,
+                          timeout=120)
+    lines = done.stdout.splitlines()
+    assert done.returncode == 0 and lines[0].startswith("configs: ") and "paper" in done.stdout, done.stderr
+    assert lines[-1] == "atexit handler ran" and "torn down" not in lines
+
+
+def test_the_script_waits_for_a_thread_still_working_as_the_usual_exit_does():
+    done = subprocess.run([sys.executable, "-c", _SCRIPT_END, "thread", "run", "absent.toml"], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert done.stdout.splitlines()[:2] == ["thread done", "atexit handler ran"]
+
+
+def test_the_packaged_controller_is_read_once_per_process_not_once_per_run(monkeypatch):
+    from dronefleet.delivery import simulation
+    from dronefleet.delivery.config import default_config, replace
+
+    reads = []
+    monkeypatch.setattr(simulation, "load_supervisor", lambda path: reads.append(path) or load_supervisor(path))
+    simulation._packaged_supervisor.cache_clear()
+    config = replace(default_config(), horizon_weeks=0.01, n_uavs=3)
+    for seed in (0, 1):
+        simulation.initial_state(replace(config, seed=seed))
+    assert reads == [simulation.BUILTIN_CONTROLLER]

@@ -537,3 +537,22 @@ def test_without_dask_the_executor_says_what_to_install(tmp_path, monkeypatch, c
     assert cli.main(["sweep", "run", str(SMOKE), "--results", str(tmp_path), "--executor", "dask",
                      "--scheduler", "tcp://127.0.0.1:1"]) == 2
     assert "pip install 'dronefleet[dask]'" in capsys.readouterr().err
+
+
+def _worker_pid(item):
+    return os.getpid()
+
+
+def test_local_workers_serve_the_next_call_within_reused_workers_and_end_with_the_block():
+    from dronefleet import executors
+
+    def worker_pids():
+        return {pid for _, pid, _ in executors.local(_worker_pid, range(6), 2)} - {os.getpid()}
+
+    with executors.reused_workers():
+        first, second = worker_pids(), worker_pids()
+    assert len(first) == 2 and second == first  # the second call's items went to the same processes
+    for pid in first:
+        with pytest.raises(ProcessLookupError):  # ended (and reaped) with the block
+            os.kill(pid, 0)
+    assert not worker_pids() & worker_pids()  # outside the block, each call has workers of its own

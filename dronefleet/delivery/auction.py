@@ -75,6 +75,7 @@ from numba.core.registry import cpu_target
 
 from ..config import ConfigError, _suggest, brief
 from ..fpmath import log
+from ..jit import borrowing
 from ..plugins import IMPORT_NOTICE_S, importing  # read at each import: tests shorten it
 
 logger = logging.getLogger(__name__)  # not ``log``: that is fpmath's logarithm here
@@ -90,7 +91,7 @@ RULE_ARGS = (types.float64, types.float64, types.float64, types.float64, typeof(
 RULE_SIGNATURE = types.Tuple((types.boolean, types.float64))(*RULE_ARGS)
 
 
-@njit(cache=True)
+@borrowing
 def least_confident(f, w_norm, soc, theta, rng):
     """Bid iff f >= 0; the lowest confidence f / ||w|| wins."""
     if f >= 0.0:
@@ -98,7 +99,7 @@ def least_confident(f, w_norm, soc, theta, rng):
     return False, 0.0
 
 
-@njit(cache=True)
+@borrowing
 def most_confident(f, w_norm, soc, theta, rng):
     """Bid iff f >= 0; the highest confidence f / ||w|| wins."""
     if f >= 0.0:
@@ -106,7 +107,7 @@ def most_confident(f, w_norm, soc, theta, rng):
     return False, 0.0
 
 
-@njit(cache=True)
+@borrowing
 def random(f, w_norm, soc, theta, rng):
     """Bid iff f >= 0 with a value drawn from U(0, 1); the highest wins."""
     if f >= 0.0:
@@ -114,7 +115,7 @@ def random(f, w_norm, soc, theta, rng):
     return False, 0.0
 
 
-@njit(cache=True)
+@borrowing
 def threshold(f, w_norm, soc, theta, rng):
     """Bid iff SoC >= theta, whatever the policy says; the highest SoC wins."""
     if soc >= theta:
@@ -349,7 +350,7 @@ def _own_return_type(kernel):
         return None
 
 
-@njit(cache=True)
+@borrowing
 def bid(rule, kernel, f, w_norm, soc, theta, rng):
     """Whether a UAV bids and its score under the rule with code ``rule`` (see ``RULES``).
 

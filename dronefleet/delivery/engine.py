@@ -26,6 +26,7 @@ from numba import njit, types
 from .auction import RULE_SIGNATURE, RULES, bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
 from ..fpmath import log
+from ..jit import borrowing
 from .policy import decision, sgd_step
 from ..supervisor import take
 
@@ -124,6 +125,12 @@ class OrderBook(NamedTuple):
     # the last), so that a scan walks on in O(1) and an allocated order leaves in O(log n).
     queue_tree: np.ndarray  # int64 (n + 1,)
     queue_next: np.ndarray  # int64 (n,), valid for queued orders
+    # The queued orders' features again, packed in no particular order (first counters[QUEUE_LEN]
+    # columns), and where each order sits: a UAV's reach is recomputed by a loop over contiguous
+    # memory, not by a walk along queue_next (a load that waits for the one before).
+    queued_x: np.ndarray    # (2, n): x_distance, x_mass
+    queued_ids: np.ndarray  # int64 (n,): the order in each column
+    queued_pos: np.ndarray  # int64 (n,): the column of each queued order
 
 
 class Fleet(NamedTuple):
@@ -201,7 +208,7 @@ class Series(NamedTuple):
     reserved: np.ndarray
 
 
-@njit(cache=True)
+@borrowing
 def soc_at(fleet, i, t, charge_rate):
     """SoC (percent) of UAV ``i`` at time ``t`` in closed form, whatever it is doing."""
     mode = fleet.mode[i]
@@ -214,7 +221,7 @@ def soc_at(fleet, i, t, charge_rate):
     return np.nan
 
 
-@njit(cache=True)
+@borrowing
 def _step(table, sup, quiet, bid_silent, counters, i, event):
     """Move UAV ``i``'s supervisor along ``event``; record the refusal and return False if not allowed.
 
@@ -240,7 +247,7 @@ def _step(table, sup, quiet, bid_silent, counters, i, event):
     return False
 
 
-@njit(cache=True)
+@borrowing
 def _scan_terms(terms, k, coef, intercept, soc_ref, t_ref, epoch, params, i):
     """Fill slot ``k`` of ``terms`` (Fleet.scan_terms) for idle UAV ``i`` and the scan epoch ``epoch``.
 
@@ -264,7 +271,7 @@ def _scan_terms(terms, k, coef, intercept, soc_ref, t_ref, epoch, params, i):
     terms[SCAN_W_NORM, k] = np.sqrt(coef[i, 0] * coef[i, 0] + coef[i, 1] * coef[i, 1] + coef[i, 2] * coef[i, 2])
 
 
-@njit(cache=True, inline="always")
+@borrowing(inline="always")
 def _may_bid(terms, k, x_distance, x_mass):
     """Whether the idle UAV in slot ``k`` may have f >= 0 for the order at some tick of the scan epoch.
 
@@ -275,7 +282,7 @@ def _may_bid(terms, k, x_distance, x_mass):
     return value + terms[SCAN_OFFSET, k] >= -F_MARGIN * (1.0 + abs(value) + terms[SCAN_ABS_INTERCEPT, k])
 
 
-@njit(cache=True, inline="always")
+@borrowing(inline="always")
 def _decision_bounds(terms, k, x_distance, x_mass):
     """(lower, upper) bounds of the decision value of the idle UAV in slot ``k`` for the order at any tick of the epoch.
 
@@ -286,7 +293,7 @@ def _decision_bounds(terms, k, x_distance, x_mass):
     return value + terms[SCAN_OFFSET_LOW, k] - margin, value + terms[SCAN_OFFSET, k] + margin
 
 
-@njit(cache=True, inline="always")
+@borrowing(inline="always")
 def _confidence_bounds(terms, k, x_distance, x_mass, most):
     """(lower, upper) bounds of the score (confidence, or its negation unless ``most``) of slot ``k`` if it bids.
 
@@ -299,7 +306,7 @@ def _confidence_bounds(terms, k, x_distance, x_mass, most):
     return -(high / w_norm), -(max(low, 0.0) / w_norm)
 
 
-@njit(cache=True)
+@borrowing
 def _score_to_beat(fleet, uavs, n, x_distance, x_mass, most):
     """The highest score that some UAV among ``uavs[:n]`` bids for sure with (-inf if none)."""
     beat = -np.inf
@@ -310,7 +317,7 @@ def _score_to_beat(fleet, uavs, n, x_distance, x_mass, most):
     return beat
 
 
-@njit(cache=True)
+@borrowing
 def _become_idle(fleet, counters, params, i):
     """UAV ``i`` has landed (and learned): it joins the packed idle set."""
     n_idle = counters[N_IDLE]
@@ -322,7 +329,7 @@ def _become_idle(fleet, counters, params, i):
                 fleet.scan_epoch, params, i)
 
 
-@njit(cache=True)
+@borrowing
 def _leave_idle(fleet, counters, i):
     """UAV ``i`` (idle) won an auction: the last of the packed idle set moves to its slot."""
     last = counters[N_IDLE] - 1
@@ -336,7 +343,7 @@ def _leave_idle(fleet, counters, i):
     counters[N_IDLE] = last
 
 
-@njit(cache=True)
+@borrowing
 def first_tick_at_or_after(t, interval):
     """The smallest tick index k with k * interval >= t, exactly as the loop computes tick times.
 
@@ -359,13 +366,34 @@ def first_tick_at_or_after(t, interval):
     return k
 
 
-@njit(cache=True)
+@borrowing(inline="always")
 def _order_value(coef, i, x_distance, x_mass):
     """The part of UAV ``i``'s decision function that depends on the order (standardised features)."""
     return coef[i, 0] * x_distance + coef[i, 1] * x_mass
 
 
-@njit(cache=True)
+@borrowing(inline="always")
+def _max_order_value(coef, i, queued_x, n):
+    """The largest :func:`_order_value` of UAV ``i`` over the first ``n`` columns of ``queued_x`` (-inf if none).
+
+    A max is exact, so its order does not matter: four running maxima, so that each step
+    does not wait for the comparison before it.
+    """
+    b0 = b1 = b2 = b3 = -np.inf
+    x0 = queued_x[0]
+    x1 = queued_x[1]
+    whole = n - n % 4
+    for j in range(0, whole, 4):
+        b0 = max(b0, _order_value(coef, i, x0[j], x1[j]))
+        b1 = max(b1, _order_value(coef, i, x0[j + 1], x1[j + 1]))
+        b2 = max(b2, _order_value(coef, i, x0[j + 2], x1[j + 2]))
+        b3 = max(b3, _order_value(coef, i, x0[j + 3], x1[j + 3]))
+    for j in range(whole, n):
+        b0 = max(b0, _order_value(coef, i, x0[j], x1[j]))
+    return max(max(b0, b1), max(b2, b3))
+
+
+@borrowing
 def _earlier(next_s, a, b):
     """Whether UAV ``a``'s next event comes before ``b``'s: by time, then by id, NaN first.
 
@@ -381,7 +409,7 @@ def _earlier(next_s, a, b):
     return ta < tb or (ta == tb and a < b)
 
 
-@njit(cache=True)
+@borrowing
 def schedule(fleet, i, t):
     """Set UAV ``i``'s next event to ``t`` and move it to its place in the event heap (O(log S))."""
     next_s = fleet.next_s
@@ -414,7 +442,7 @@ def schedule(fleet, i, t):
     where[i] = k
 
 
-@njit(cache=True)
+@borrowing
 def _rank(tree, order):
     """How many queued orders have an id <= ``order`` (0 for -1)."""
     count = 0
@@ -425,7 +453,7 @@ def _rank(tree, order):
     return count
 
 
-@njit(cache=True)
+@borrowing
 def queued_at(tree, k):
     """The queued order at position ``k`` (0-based, ascending ids); ``k`` < the queue length."""
     n = tree.shape[0] - 1
@@ -442,7 +470,7 @@ def queued_at(tree, k):
     return node
 
 
-@njit(cache=True)
+@borrowing
 def _tree_add(tree, order, delta):
     """Add ``delta`` (1: queued, -1: taken out) to ``order``'s membership count."""
     k = order + 1
@@ -451,7 +479,7 @@ def _tree_add(tree, order, delta):
         k += k & -k
 
 
-@njit(cache=True)
+@borrowing
 def _enqueue(book, fleet, counters, order):
     """Put ``order`` among the unallocated ones, at its place in arrival order."""
     tree = book.queue_tree
@@ -470,11 +498,15 @@ def _enqueue(book, fleet, counters, order):
     reach = fleet.reach
     x0 = book.x_distance[order]
     x1 = book.x_mass[order]
+    book.queued_x[0, n] = x0
+    book.queued_x[1, n] = x1
+    book.queued_ids[n] = order
+    book.queued_pos[order] = n
     for i in range(reach.shape[0]):
         reach[i] = max(reach[i], _order_value(coef, i, x0, x1))
 
 
-@njit(cache=True)
+@borrowing
 def _dequeue(book, fleet, counters, pos):
     """Take the order at queue position ``pos`` out of the queue."""
     tree = book.queue_tree
@@ -482,7 +514,15 @@ def _dequeue(book, fleet, counters, pos):
     if pos > 0:
         book.queue_next[queued_at(tree, pos - 1)] = book.queue_next[order]
     _tree_add(tree, order, TAKEN_OUT)
-    counters[QUEUE_LEN] -= 1
+    last = counters[QUEUE_LEN] - 1
+    counters[QUEUE_LEN] = last
+    # The last packed column moves into the one the order leaves.
+    k = book.queued_pos[order]
+    moved = book.queued_ids[last]
+    book.queued_x[0, k] = book.queued_x[0, last]
+    book.queued_x[1, k] = book.queued_x[1, last]
+    book.queued_ids[k] = moved
+    book.queued_pos[moved] = k
     coef = fleet.coef
     reach = fleet.reach
     stale = fleet.reach_stale
@@ -493,7 +533,7 @@ def _dequeue(book, fleet, counters, pos):
             stale[i] = True
 
 
-@njit(cache=True)
+@borrowing
 def threshold_gap(theta):
     """A bound on 100 - SoC below which a charging UAV's computed SoC may be >= ``theta``.
 
@@ -506,7 +546,7 @@ def threshold_gap(theta):
     return ((100.0 - theta) + half_ulp) * (1.0 + THRESHOLD_MARGIN)
 
 
-@njit(cache=True, inline="always")
+@borrowing(inline="always")
 def _earliest_bid(book, fleet, counters, params, t):
     """A lower bound on when an idle UAV may first bid on a queued order, if nothing else happens.
 
@@ -533,12 +573,7 @@ def _earliest_bid(book, fleet, counters, params, t):
                            + log((100.0 - fleet.soc_ref[i]) / theta_gap) / params.charge_rate)
             continue
         if fleet.reach_stale[i]:
-            best = -np.inf
-            order = queued_at(book.queue_tree, OLDEST) if counters[QUEUE_LEN] > 0 else -1
-            while order >= 0:
-                best = max(best, _order_value(fleet.coef, i, book.x_distance[order], book.x_mass[order]))
-                order = book.queue_next[order]
-            fleet.reach[i] = best
+            fleet.reach[i] = _max_order_value(fleet.coef, i, book.queued_x, counters[QUEUE_LEN])
             fleet.reach_stale[i] = False
         slack = fleet.reach[i] + fleet.intercept[i]
         w_soc = fleet.coef[i, 2] / params.soc_std
@@ -559,7 +594,7 @@ def _earliest_bid(book, fleet, counters, params, t):
     return earliest
 
 
-@njit(cache=True, inline="always")
+@borrowing(inline="always")
 def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     """The first tick before tick ``end_max`` (and within SCAN_TICKS) whose order some idle UAV may bid on.
 
@@ -603,7 +638,7 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
 # Inlined into advance, with _earliest_bid and _first_possible_tick: as calls, each one increfs and
 # decrefs every array it reads from the named tuples, at every event that leaves a tick pending
 # (reference counting was 28 % of the paper run, docs/guide/benchmarks.md); inlined, numba prunes the pairs.
-@njit(cache=True, inline="always")
+@borrowing(inline="always")
 def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     """Jump over ticks before ``t_other`` at which provably nobody bids; True if any were skipped.
 
@@ -638,7 +673,7 @@ def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     return True
 
 
-@njit(cache=True)
+@borrowing
 def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
     """UAV ``i`` takes off with ``order`` at ``t``: its whole flight is planned in closed form.
 
@@ -674,7 +709,7 @@ def _takeoff(book, fleet, attempts, counters, params, i, order, t, soc):
     schedule(fleet, i, t + outbound_s)
 
 
-@njit(cache=True)
+@borrowing
 def _uav_event(book, fleet, attempts, counters, params, table, i, t):
     """The reserved takeoff, turn (delivery or abort), landing or loss of UAV ``i`` at ``t``. False if refused."""
     row = fleet.attempt[i]
@@ -729,7 +764,7 @@ def _uav_event(book, fleet, attempts, counters, params, table, i, t):
     return True
 
 
-@njit(cache=True)
+@borrowing
 def _reserved_takeoff(book, fleet, params, i, order, t, wait):
     """When UAV ``i``, reserving ``order`` at ``t`` with bid ``wait``, takes off.
 
@@ -753,7 +788,7 @@ def _reserved_takeoff(book, fleet, params, i, order, t, wait):
     return np.nan
 
 
-@njit(cache=True)
+@borrowing
 def _reservation_bids(book, fleet, counters, params, table, order, t, immediate):
     """Second phase of an auction with reservations: the idle UAVs that did not bid now.
 
@@ -794,7 +829,14 @@ def _reservation_bids(book, fleet, counters, params, table, order, t, immediate)
     return False, reserver, best_wait
 
 
-@njit(cache=True)
+# _nrt set, not left to be inherited from the borrowing caller: numba's sort allocates its stack.
+@njit(cache=True, _nrt=True)
+def _sort(ids, n):
+    """Sort ``ids[:n]`` in place."""
+    ids[:n].sort()
+
+
+@borrowing
 def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
     """Put the idle UAVs an auction must evaluate into ``fleet.bid_ids``, ascending; return how many.
 
@@ -811,7 +853,7 @@ def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
             if not fleet.quiet[i] or _may_bid(fleet.scan_terms, k, x_distance, x_mass):
                 ids[n] = i
                 n += 1
-        ids[:n].sort()
+        _sort(ids, n)
         return n
     for i in range(n_uavs):
         if fleet.mode[i] == IDLE and (not bounded or not fleet.quiet[i]
@@ -821,7 +863,7 @@ def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
     return n
 
 
-@njit(cache=True)
+@borrowing
 def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel):
     """Advertise one order at tick time ``t``, resolve its auction: DONE, SUPERVISOR_REFUSED or BAD_SCORE.
 
@@ -932,7 +974,7 @@ def _auction(book, fleet, attempts, counters, params, table, rng, t, rule_kernel
     return DONE
 
 
-@njit(cache=True, nogil=True)
+@borrowing(nogil=True)
 def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop, rule_kernel, stop):
     """Process every event at or before ``t_stop`` (seconds), in the order of the module doc.
 

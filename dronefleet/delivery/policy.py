@@ -19,6 +19,8 @@ scikit-learn is imported only by :func:`to_sgdclassifier`; the kernels never nee
 import numpy as np
 from numba import njit
 
+from ..jit import borrowing
+
 # WeightVector folds its scale into the weights when it falls below this (float64).
 _WSCALE_RESET = 1e-9
 
@@ -58,7 +60,7 @@ def optimal_init(alpha):
     return 1.0 / (initial_eta0 * alpha)
 
 
-@njit(cache=True)
+@borrowing
 def decision(coef, intercept, i, x0, x1, x2):
     """Decision function ``f = w . x + b`` of UAV ``i``.
 
@@ -84,7 +86,7 @@ def decision(coef, intercept, i, x0, x1, x2):
     return p + intercept[i]
 
 
-@njit(cache=True)
+@borrowing
 def sgd_step(coef, intercept, t, i, x0, x1, x2, y, alpha, t0):
     """One ``partial_fit`` step of UAV ``i``'s classifier, in place.
 

@@ -11,6 +11,7 @@ its streams come from (seed, period), so a second period sees fresh orders even
 with the seed of the first.
 """
 
+import functools
 import math
 import os
 import traceback
@@ -117,7 +118,7 @@ def initial_state(config: Config, supervisor: str | os.PathLike | None = None, o
     features = standardise(np.column_stack([orders.distance_m, orders.mass_kg, np.zeros(n)]), mean, std)
 
     rule = resolve_rule(config.rule)
-    automaton = load_supervisor(BUILTIN_CONTROLLER if supervisor is None else supervisor)
+    automaton = _packaged_supervisor(BUILTIN_CONTROLLER) if supervisor is None else load_supervisor(supervisor)
     table = automaton.transition_table(engine.EVENT_NAMES)
     bids_on = BIDS_ON[rule.bids_on]
     idle = automaton.init_state
@@ -135,7 +136,8 @@ def initial_state(config: Config, supervisor: str | os.PathLike | None = None, o
         x_distance=np.ascontiguousarray(features[:, 0]), x_mass=np.ascontiguousarray(features[:, 1]),
         power_w=config_power(config, orders.mass_kg), attempts=np.zeros(n, np.int32),
         delivered_s=np.full(n, np.nan), queue_tree=np.zeros(n + 1, np.int64),
-        queue_next=np.full(n, -1, np.int64))
+        queue_next=np.full(n, -1, np.int64), queued_x=np.zeros((2, n)), queued_ids=np.zeros(n, np.int64),
+        queued_pos=np.zeros(n, np.int64))
     idle_ids = np.argsort(lost, kind="stable").astype(np.int64)  # the idle UAVs first (the lost ones after)
     fleet = engine.Fleet(
         soh=soh, drain=drain_per_watt(config.capacity_wh, soh), coef=coef, intercept=intercept, steps=steps,
@@ -170,6 +172,13 @@ def initial_state(config: Config, supervisor: str | os.PathLike | None = None, o
     return RunState(book, fleet, _attempt_table(max(64, n)), series, counters, params, table,
                     bid_rng, orders.mass_kg, period, max(attempt_limit(config), 64, n),
                     rule.kernel if rule.code == PLUGIN else None)
+
+
+@functools.lru_cache(maxsize=1)
+def _packaged_supervisor(path):
+    """The packaged controller at ``path``, read and validated once per process, not once per run
+    (3 ms of a sweep worker's every run); only read from, like any automaton."""
+    return load_supervisor(path)
 
 
 def _attempt_table(capacity, old=None):

@@ -15,17 +15,39 @@ of plain arrays: :func:`beacon_update` (section 6), :func:`beacon_weight`, :func
 :func:`region_change` (section 12).
 
 Details the spec leaves to the implementation, as read here:
-- A robot spawned at tick k is in that tick's snapshot (at the spawn point) and decides at once.
+- Sensing (links, S_hat, guidance, the IR rays) sees the section-5 snapshot: the positions at the
+  end of tick k-1. Only translation (7.5) sees the positions already updated this tick (A29).
+- A robot spawned at tick k did not exist at the end of k-1: in that tick it senses nothing (no
+  links, no rays), broadcasts nothing and is not sensed (only its body blocks others' steps), and
+  its first decision is a random search (both draws taken, A33).
 - The countdown is a per-robot clock: at 0 it restarts at n_T whatever the mode; only NORMAL and
   BACKTRACK robots decide then (a robot leaving R after charging keeps its 7.2 turn until its
   next due decision). Immediate decisions (7.3, A41) do not restart it.
+- The RECONNECT contact test runs just before the decisions of step 4 (section 11 lists it after
+  them), so that the contact's decision is "immediate" (7.3) in the same tick, not the next.
+  Reaching d_rc without contact gives NORMAL and a random search (no guidance, both draws) at
+  the next tick's step 4. Any completion (section 10, rows 9, 11) ends RECONNECT and BACKTRACK.
 - Row 3 also matches a robot already in role R (nothing changes, but row 9 cannot fire before
-  it has charged); only the changes of role are counted as row-3 firings (``nest_recharges``).
-- A new beacon's first window opens at the next tick, so every window holds n_T snapshots.
-- ``broadcast = "update"``: a robot broadcasts in the tick after each of its heading decisions.
+  it has charged); it is not counted: the row-3 count (``nest_recharges``, ``row3``) counts the
+  changes of role F_OUT/F_IN -> R in N only.
+- A new beacon counts its window down from the tick it became one (section 11 step 8 literally):
+  its first window ends at k + n_T - 1 and holds the n_T - 1 snapshots of ticks k+1 .. k+n_T-1.
+- ``turn_on = "any"`` (A26 "every role change") adds the turn of row 2. Row 1 does not turn:
+  a beacon does not move, and the decay turn (7.3) reverses the heading it stopped with, which
+  points out of the network it left; turning at row 1 too would make that reversal send the
+  reconnecting robot out of coverage instead of back into it.
+- The beacon spell voids the trip in progress: a reverted robot has left no region until it
+  next enters one, even if it reverted inside a region.
+- SOC_ref is refreshed inside region(s_c) in any role (section 10), beacons included.
+- P_in (section 8) is judged at the centre after the move, kappa at the centre before it.
+- Among equally near IR hits the first in ray order wins (0, then left before right).
+- ``broadcast = "update"``: a robot broadcasts in the tick after each of its heading decisions
+  (7.1 and the immediate ones of 7.3); not after a 7.2 turn or a blocked-turn.
 - A trip's length and energy are those of the ticks after the one it left its region in, up
   to the one it entered the other in; its duration is (tick entered - tick left) tau.
 - The heading alignment of section 12 uses the motion heading of the last tick.
+- A spawned robot starts with E = soc0 E_cap (soc0 = 1 by default, A39); an unspawned robot
+  counts as soc0 in SOC_sum.
 """
 
 import numpy as np
@@ -99,6 +121,12 @@ N_TRIP = 11
  SN_LOAD, SN_OMEGA, SN_VX, SN_VY, SN_S) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 18, 21)
 N_SNAP = 24
 LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL_FRAME = range(6)
+# Columns of a robot's state in ``run_runs(..., start)`` (a hand-built start, read back at the end).
+(ST_STATUS, ST_SUP, ST_MODE, ST_X, ST_Y, ST_THETA_A, ST_THETA, ST_ENERGY, ST_LOAD, ST_S_C, ST_SOC_REF,
+ ST_VISITED_R, ST_N_FAILED, ST_COUNTDOWN, ST_ROLE_K1, ST_ROLE_K2, ST_BLOCKED, ST_BT_BUDGET, ST_BT_TRAVEL,
+ ST_RC_TRAVEL, ST_LINKS, ST_AVOIDING, ST_OMEGA, ST_VX, ST_VY, ST_S, ST_INIT, ST_IMMEDIATE, ST_SEARCH) = (
+    0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 25, 28, 31, 34, 37, 38)
+N_STATE = 39
 
 
 # ------------------------------------------------------------------ small rules (tested alone)
@@ -330,22 +358,24 @@ def clear_memory(i, omega, bvx, bvy, bsoc, binit, weight):
 
 
 @njit(cache=True)
-def become_beacon(i, k, n_t, countdown, beacon_since, last_left, omega, bvx, bvy, bsoc, binit, weight, ikey):
-    """Robot i becomes a beacon at tick k (row 1): fresh memory and inbox, window countdown n_T
-    (its first window opens at k + 1), and the trip in progress voided (section 12)."""
+def become_beacon(i, n_t, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey):
+    """Robot i becomes a beacon (row 1): fresh memory and inbox, window countdown n_T (counted
+    down from this tick on, section 11 step 8), and the trip in progress voided: no region counts
+    as left until the robot next enters one (section 12)."""
     countdown[i] = n_t
-    beacon_since[i] = k
     last_left[i] = NO_REGION
+    voided[i] = True
     clear_memory(i, omega, bvx, bvy, bsoc, binit, weight)
     ikey[i, :] = -1
 
 
 @njit(cache=True)
-def region_change(i, k, old, new, role, last_left, tick_left, role_left, acc, trips, n_trips, run_id):
+def region_change(i, k, old, new, role, last_left, voided, tick_left, role_left, acc, trips, n_trips, run_id):
     """Trip bookkeeping (section 12) of robot i whose region went from ``old`` to ``new`` at tick k:
-    leaving a region starts a trip (``acc[i]`` = length, energy, soft length reset), entering a
-    region Y other than the last one left appends a trip record. Returns (trips, n_trips)."""
-    if old != NO_REGION:
+    leaving a region starts a trip (``acc[i]`` = length, energy, soft length reset) unless a beacon
+    spell ``voided[i]`` it, entering a region Y other than the last one left appends a trip record
+    (and ends the voiding). Returns (trips, n_trips)."""
+    if old != NO_REGION and not voided[i]:
         last_left[i] = old
         tick_left[i] = k
         role_left[i] = role
@@ -369,7 +399,18 @@ def region_change(i, k, old, new, role, last_left, tick_left, role_left, acc, tr
             row[TR_ROBOT] = i
             n_trips += 1
         last_left[i] = NO_REGION
+        voided[i] = False
     return trips, n_trips
+
+
+@njit(cache=True)
+def complete(i, key, s_c, n_failed, mode):
+    """Robot i completes the region of ``key`` (Eq 5-7, section 10): s_c <- key, n_failed <- 0, and
+    a RECONNECT or BACKTRACK robot is back in NORMAL (its failed attempts are over)."""
+    s_c[i] = key
+    n_failed[i] = 0
+    if mode[i] == RECONNECT or mode[i] == BACKTRACK:
+        mode[i] = NORMAL
 
 
 # ------------------------------------------------------------------ geometry
@@ -604,7 +645,7 @@ def alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
 
 
 @njit(cache=True, nogil=True)
-def run_runs(opts, pars, g, seeds, runs, table, stop):
+def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     """Every run of one configuration.
 
     Parameters
@@ -617,6 +658,12 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
         Root seed and index of each run.
     table : (1, states, 10) int64
         The role supervisor's transition table over the EV_* columns.
+    start : (0, N_STATE) or (robots, N_STATE) float64
+        Empty: every run starts as section 11 says (all robots unspawned). Else (tests): every run
+        starts from this hand-built state (ST_* columns; the robots that exist come first, the
+        role is the supervisor state ST_SUP; beacon weights follow from the memory; inboxes
+        empty), and the state at the end of the last run is written back into it (ST_LINKS,
+        ST_AVOIDING: of the last tick).
     stop : (1,) int8
         Ctrl-C flag, checked every tick.
 
@@ -658,9 +705,11 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     step = v0 * tau
     d_rc = 2.0 * comm
     margin = 2.0 * step + 1e-9          # how far two robots can close in on each other within a tick
-    ray_reach2 = (ray_len + r_body + margin) ** 2
-    touch2 = (2.0 * r_body) ** 2
-    touch_reach2 = (2.0 * r_body + margin) ** 2
+    ray_reach = ray_len + r_body + margin
+    ray_reach2 = ray_reach * ray_reach
+    touch2 = 4.0 * r_body * r_body
+    touch_reach = 2.0 * r_body + margin
+    touch_reach2 = touch_reach * touch_reach
     field_w, field_h = g[G_W], g[G_H]
     kind = int(g[G_KIND])
     hard = kind == KIND_HARD
@@ -695,6 +744,8 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     role_k2 = np.zeros(n, dtype=np.int64)
     x = np.zeros(n)
     y = np.zeros(n)
+    sx = np.zeros(n)          # positions at the end of tick k-1 (the section-5 snapshot)
+    sy = np.zeros(n)
     theta_a = np.zeros(n)
     pcx = np.ones(n)          # plan direction (cos, sin) of theta_a
     pcy = np.zeros(n)
@@ -715,11 +766,12 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
     rc_travel = np.zeros(n)
     countdown = np.zeros(n, dtype=np.int64)
     immediate = np.zeros(n, dtype=np.bool_)
+    search = np.zeros(n, dtype=np.bool_)      # the next decision is a random search (spawn, 7.3)
     decided = np.zeros(n, dtype=np.bool_)
     nearest = np.zeros(n, dtype=np.int64)
-    beacon_since = np.zeros(n, dtype=np.int64)
     reg = np.zeros(n, dtype=np.int64)
     last_left = np.zeros(n, dtype=np.int64)
+    voided = np.zeros(n, dtype=np.bool_)
     tick_left = np.zeros(n, dtype=np.int64)
     role_left = np.zeros(n, dtype=np.int64)
     acc = np.zeros((n, 3))            # trip accumulators: length, gross energy, soft length
@@ -782,10 +834,15 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
         n_failed[:] = 0
         countdown[:] = 0
         immediate[:] = False
+        search[:] = False
         decided[:] = False
         nearest[:] = -1
         reg[:] = REG_N
         last_left[:] = NO_REGION
+        voided[:] = False
+        bt_budget[:] = 0.0
+        bt_travel[:] = 0.0
+        rc_travel[:] = 0.0
         acc[:] = 0.0
         omega[:] = 0.0
         bvx[:] = 0.0
@@ -798,6 +855,46 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
         f_hist[:] = 0
         nb_hist[:] = 0
         spawned = 0
+        if start.shape[0] > 0:
+            for i in range(n):
+                st = start[i]
+                if int(st[ST_STATUS]) == UNSPAWNED:
+                    continue
+                spawned = i + 1
+                status[i] = int(st[ST_STATUS])
+                sup[i, 0] = int(st[ST_SUP])
+                role[i] = ROLE_OF_STATE[sup[i, 0]] if ROLE_OF_STATE[sup[i, 0]] >= 0 else int(st[ST_ROLE_K1])
+                mode[i] = int(st[ST_MODE])
+                x[i] = st[ST_X]
+                y[i] = st[ST_Y]
+                theta_a[i] = st[ST_THETA_A]
+                pcy[i], pcx[i] = sincos(theta_a[i])
+                theta[i] = st[ST_THETA]
+                mdy[i], mdx[i] = sincos(theta[i])
+                energy[i] = st[ST_ENERGY]
+                load[i] = int(st[ST_LOAD])
+                s_c[i] = int(st[ST_S_C])
+                soc_ref[i] = st[ST_SOC_REF]
+                visited_r[i] = st[ST_VISITED_R] != 0.0
+                n_failed[i] = int(st[ST_N_FAILED])
+                countdown[i] = int(st[ST_COUNTDOWN])
+                role_k1[i] = int(st[ST_ROLE_K1])
+                role_k2[i] = int(st[ST_ROLE_K2])
+                blocked[i] = int(st[ST_BLOCKED])
+                avoiding[i] = st[ST_AVOIDING] != 0.0
+                immediate[i] = st[ST_IMMEDIATE] != 0.0
+                search[i] = st[ST_SEARCH] != 0.0
+                bt_budget[i] = st[ST_BT_BUDGET]
+                bt_travel[i] = st[ST_BT_TRAVEL]
+                rc_travel[i] = st[ST_RC_TRAVEL]
+                reg[i] = region_of(x[i], y[i], g)
+                for q in range(3):
+                    omega[i, q] = st[ST_OMEGA + q]
+                    bvx[i, q] = st[ST_VX + q]
+                    bvy[i, q] = st[ST_VY + q]
+                    bsoc[i, q] = st[ST_S + q]
+                    binit[i, q] = st[ST_INIT + q] != 0.0
+                    weight[i, q] = beacon_weight(omega[i, q], bsoc[i, q], binit[i, q], rho_f, rho_c, wform)
         resources = 0
         unloads = 0
         deaths = 0
@@ -809,6 +906,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 break
             milestones = 0                         # bit per milestone label reached this tick
             # 1. spawn (A33)
+            new = -1                               # the robot spawned this tick: not in the snapshot
             if spawned < n:
                 clear = True
                 for j in range(spawned):
@@ -818,12 +916,16 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                         clear = False
                         break
                 if clear:
-                    i = spawned
+                    new = spawned
                     spawned += 1
-                    status[i] = ALIVE
-                    energy[i] = soc0 * e_cap
+                    status[new] = ALIVE
+                    energy[new] = soc0 * e_cap
+                    search[new] = True             # its first heading is random (A33)
 
-            # 2. snapshot of the end of tick k-1: distances, links, beacon inboxes (section 5)
+            # 2. snapshot of the end of tick k-1: distances, links, beacon inboxes (section 5); the
+            # robot spawned this tick did not exist then: it senses nothing, is not sensed, is silent
+            sx[:spawned] = x[:spawned]
+            sy[:spawned] = y[:spawned]
             for i in range(spawned):
                 if status[i] != ALIVE or role[i] == B:
                     continue                       # only mobile robots sense, link and move
@@ -841,7 +943,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     beacons[n_beacons] = i
                     n_beacons += 1
             for i in range(spawned):
-                if status[i] != ALIVE or role[i] == B:
+                if status[i] != ALIVE or role[i] == B or i == new:
                     continue
                 for q in range(n_beacons):
                     b = beacons[q]
@@ -854,7 +956,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     if los_bodies:
                         occluded = False
                         for o in range(spawned):
-                            if o != i and o != b and status[o] != UNSPAWNED and \
+                            if o != i and o != b and o != new and status[o] != UNSPAWNED and \
                                     segment_point_dist2(x[i], y[i], x[b], y[b], x[o], y[o]) < r_body * r_body:
                                 occluded = True
                                 break
@@ -918,11 +1020,9 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     load[i] = 0
                 if completion_last:
                     if rg != NO_REGION:
-                        s_c[i] = rg
-                        n_failed[i] = 0
+                        complete(i, rg, s_c, n_failed, mode)
                 elif rg == r0:                     # F_OUT in T, F_IN in N, R in R
-                    s_c[i] = r0
-                    n_failed[i] = 0
+                    complete(i, r0, s_c, n_failed, mode)
                 row = choose_row(r0, mode[i], rg, nb_cnt[i], role_k1[i], role_k2[i], energy[i] / e_cap, s_hat[i],
                                  visited_r[i], energy[i] == e_cap, load[i] > 0, no_r_guidance[i])
                 if row == 0 or (row == 3 and r0 == R):
@@ -936,19 +1036,18 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                 elif mode[i] == CHARGING or row == 1:
                     mode[i] = NORMAL
                 if row == 1:
-                    become_beacon(i, k, n_t, countdown, beacon_since, last_left, omega, bvx, bvy, bsoc, binit,
-                                  weight, ikey)
+                    become_beacon(i, n_t, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
                     avoiding[i] = False
                     blocked[i] = 0
+                    immediate[i] = False
+                    search[i] = False
                 elif row == 5 and t_first[2] < 0:
                     t_first[2] = k
                     milestones |= 1 << LABEL_FIRST_ROW5
                 if row == 9:                       # A17: rows 9 and 11 complete N and T
-                    s_c[i] = F_IN
-                    n_failed[i] = 0
+                    complete(i, F_IN, s_c, n_failed, mode)
                 elif row == 11:
-                    s_c[i] = F_OUT
-                    n_failed[i] = 0
+                    complete(i, F_OUT, s_c, n_failed, mode)
                 if (row == 10 or row == 11) and take(table, sup, i, EV_LOAD):
                     load[i] = r_max
                     loaded_now[i] = True
@@ -980,8 +1079,12 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     if gx == 0.0 and gy == 0.0:
                         mode[i] = NORMAL
                 elif mode[i] != NORMAL:
+                    search[i] = False              # charging since: no decision left to make random
                     continue
-                if mode[i] == NORMAL:
+                if search[i]:                      # a random search: no guidance, both draws taken
+                    search[i] = False
+                    gx, gy = 0.0, 0.0
+                elif mode[i] == NORMAL:
                     key = role[i]
                     gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, key)
                     if gx == 0.0 and gy == 0.0:
@@ -1016,7 +1119,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                     if d2[i, j] < ray_reach2 and j != i and status[j] != UNSPAWNED:
                         close[n_near] = j
                         n_near += 1
-                for r in range(N_RAYS):
+                for r in range(N_RAYS if i != new else 0):
                     hits[r] = np.inf
                     rdx = cx * ray_c[r] - cy * ray_s[r]
                     rdy = cy * ray_c[r] + cx * ray_s[r]
@@ -1031,7 +1134,8 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                                                          g[c + 2 * f], g[c + 2 * f + 1]))
                     for q in range(n_near):
                         j = close[q]
-                        best = min(best, ray_disc(xi, yi, rdx, rdy, x[j], y[j], r_body))
+                        if j != new:               # the rays see the snapshot (section 5, A29)
+                            best = min(best, ray_disc(xi, yi, rdx, rdy, sx[j], sy[j], r_body))
                     if best <= ray_len:
                         hits[r] = best
                         any_hit = True
@@ -1077,6 +1181,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                         if rc_travel[i] >= d_rc:
                             mode[i] = NORMAL
                             immediate[i] = True
+                            search[i] = True
                     elif mode[i] == BACKTRACK:
                         bt_travel[i] += step
                         if bt_travel[i] >= bt_budget[i]:
@@ -1104,14 +1209,14 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
                         status[i] = DEAD
                         deaths += 1
                         continue
-                if mobile and newreg == s_c[i]:
+                if newreg == s_c[i]:
                     soc_ref[i] = energy[i] / e_cap
                 if newreg == REG_R:
                     visited_r[i] = True
                 old = reg[i]
                 if old != newreg:
-                    trips, n_trips = region_change(i, k, old, newreg, role[i], last_left, tick_left, role_left, acc,
-                                                   trips, n_trips, run_id)
+                    trips, n_trips = region_change(i, k, old, newreg, role[i], last_left, voided, tick_left, role_left,
+                                                   acc, trips, n_trips, run_id)
                     if newreg != NO_REGION:
                         if newreg == REG_T and t_first[0] < 0:
                             t_first[0] = k
@@ -1123,7 +1228,7 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
 
             # 8. beacon windows (section 6), decay and revert (row D, 7.3)
             for i in range(spawned):
-                if status[i] != ALIVE or role[i] != B or beacon_since[i] == k:
+                if status[i] != ALIVE or role[i] != B:
                     continue
                 countdown[i] -= 1
                 if countdown[i] > 0:
@@ -1216,6 +1321,40 @@ def run_runs(opts, pars, g, seeds, runs, table, stop):
             if k == n_ticks:
                 snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_END, k, n, status, role, mode, x,
                                            y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+
+        if start.shape[0] > 0:
+            for i in range(n):
+                st = start[i]
+                st[ST_STATUS] = status[i]
+                st[ST_SUP] = sup[i, 0]
+                st[ST_MODE] = mode[i]
+                st[ST_X] = x[i]
+                st[ST_Y] = y[i]
+                st[ST_THETA_A] = theta_a[i]
+                st[ST_THETA] = theta[i]
+                st[ST_ENERGY] = energy[i]
+                st[ST_LOAD] = load[i]
+                st[ST_S_C] = s_c[i]
+                st[ST_SOC_REF] = soc_ref[i]
+                st[ST_VISITED_R] = visited_r[i]
+                st[ST_N_FAILED] = n_failed[i]
+                st[ST_COUNTDOWN] = countdown[i]
+                st[ST_ROLE_K1] = role_k1[i]
+                st[ST_ROLE_K2] = role_k2[i]
+                st[ST_BLOCKED] = blocked[i]
+                st[ST_BT_BUDGET] = bt_budget[i]
+                st[ST_BT_TRAVEL] = bt_travel[i]
+                st[ST_RC_TRAVEL] = rc_travel[i]
+                st[ST_LINKS] = links[i]
+                st[ST_AVOIDING] = avoiding[i]
+                st[ST_IMMEDIATE] = immediate[i]
+                st[ST_SEARCH] = search[i]
+                for q in range(3):
+                    st[ST_OMEGA + q] = omega[i, q]
+                    st[ST_VX + q] = bvx[i, q]
+                    st[ST_VY + q] = bvy[i, q]
+                    st[ST_S + q] = bsoc[i, q]
+                    st[ST_INIT + q] = binit[i, q]
 
         # per-run summary
         sm = summary[run]

@@ -327,11 +327,7 @@ def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), s
         key), a malformed ``--set``, a wrong type, a value out of range, a combination the model
         does not define or a run too large (:data:`RUN_LIMITS`).
     """
-    values, origin = _SECTIONS.read(DEFAULTS, path, overrides)
-    if seed is not None:
-        values["seed"] = seed
-        origin["seed"] = "--seed"
-    return _build(values, origin)
+    return _build(*_SECTIONS.read(DEFAULTS, path, overrides, seed))
 
 
 def value(config: Config, name: str) -> Any:
@@ -340,10 +336,7 @@ def value(config: Config, name: str) -> Any:
 
 def replace(config: Config, changes: Mapping[str, Any]) -> Config:
     """A validated copy of ``config`` with ``changes`` (``{key: value}``) applied, typed as in :func:`load`."""
-    for name in changes:
-        if name not in SCHEMA:
-            raise _SECTIONS.unknown_key(str(name))
-    return _build({**{name: getattr(config, name) for name in SCHEMA}, **changes}, {})
+    return _build(_SECTIONS.changed({name: getattr(config, name) for name in SCHEMA}, changes), {})
 
 
 def replicates(config: Config) -> range:

@@ -122,7 +122,7 @@ def run_kernel(params: LunarParams) -> tuple[np.ndarray, ...]:
     opts, pars, geometry = kernel_inputs(params)
     runs, seeds = run_seeds(params)
     return interrupt.call(k.run_runs, opts, pars, geometry, seeds, runs, role_table()[0],
-                          culprit="the lunar kernel")
+                          np.empty((0, k.N_STATE)), culprit="the lunar kernel")
 
 
 def _names(codes: np.ndarray, names: tuple[str, ...]) -> pa.Array:

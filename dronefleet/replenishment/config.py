@@ -161,10 +161,7 @@ def value(config: Config, name: str) -> Any:
 
 def replace(config: Config, changes: Mapping[str, Any]) -> Config:
     """A validated copy of ``config`` with ``changes`` (``{key: value}``) applied, typed as in :func:`load`."""
-    for name in changes:
-        if name not in SCHEMA:
-            raise _SECTIONS.unknown_key(str(name))
-    return _build({**{name: config.value(name) for name in SCHEMA}, **changes}, {})
+    return _build(_SECTIONS.changed({name: config.value(name) for name in SCHEMA}, changes), {})
 
 
 def replicates(config: Config) -> range:

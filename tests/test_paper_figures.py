@@ -43,7 +43,7 @@ def caption_letters(figure):
 @pytest.fixture(scope="module")
 def study_figures(tmp_path_factory):
     """Every figure of both studies redrawn (``reproduce --redraw``) from a copy of the committed
-    tables: {file name without suffix: (Figure, the files written)}."""
+    tables in this process (jobs=1: the figures are kept as drawn): {file name without suffix: (Figure, the files written)}."""
     root = tmp_path_factory.mktemp("redrawn")
     for figure in STUDY_FIGURES:
         (root / figure).mkdir()
@@ -59,7 +59,7 @@ def study_figures(tmp_path_factory):
                     yield mpl, fig, axes
 
             patch.setattr(module, "_figure", keeping)
-        drawn = reproduce.reproduce(list(STUDY_FIGURES), root, redraw=True, log=lambda *a, **k: None)
+        drawn = reproduce.reproduce(list(STUDY_FIGURES), root, redraw=True, jobs=1, log=lambda *a, **k: None)
     return {name: (fig, drawn[name]) for name, fig in kept.items()}
 
 

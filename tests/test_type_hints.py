@@ -27,11 +27,11 @@ MODULES = (
 
 
 def _compiled(function):
-    """True for a numba kernel: decorated with ``njit``/``jit``, called or not."""
+    """True for a numba kernel: decorated with ``njit``/``jit``/``borrowing``, called or not."""
     for decorator in function.decorator_list:
         target = decorator.func if isinstance(decorator, ast.Call) else decorator
         name = target.id if isinstance(target, ast.Name) else getattr(target, "attr", None)
-        if name in ("njit", "jit"):
+        if name in ("njit", "jit", "borrowing"):
             return True
     return False
 

@@ -616,6 +616,15 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
             _scan_terms(fleet.scan_terms, k, fleet.coef, fleet.intercept, fleet.soc_ref, fleet.t_ref, epoch, params,
                         fleet.idle_ids[k])
     terms = fleet.scan_terms
+    # :func:`_may_bid` with one margin for all slots, wider than each one's by F_MARGIN (1 + ...), far
+    # more than the rounding of either (|value| <= |w_distance x0| + |w_mass x1|): it passes wherever
+    # _may_bid does, and the per-slot test is a dot product and a comparison (value + offset rounds
+    # as in _may_bid). A tick it lets through in vain is an auction nobody bids in, as any other.
+    abs_distance = abs_mass = abs_intercept = 0.0
+    for k in range(n_idle):
+        abs_distance = max(abs_distance, abs(terms[SCAN_W_DISTANCE, k]))
+        abs_mass = max(abs_mass, abs(terms[SCAN_W_MASS, k]))
+        abs_intercept = max(abs_intercept, terms[SCAN_ABS_INTERCEPT, k])
     tree = book.queue_tree
     link = book.queue_next
     x_distance = book.x_distance
@@ -624,9 +633,10 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     for j in range(end - tick):
         x0 = x_distance[order]
         x1 = x_mass[order]
+        low = -F_MARGIN * (2.0 + abs_intercept + 2.0 * (abs_distance * abs(x0) + abs_mass * abs(x1)))
         anyone = False
         for k in range(n_idle):  # no early exit: a branch-free loop the compiler can vectorise
-            anyone |= _may_bid(terms, k, x0, x1)
+            anyone |= terms[SCAN_W_DISTANCE, k] * x0 + terms[SCAN_W_MASS, k] * x1 + terms[SCAN_OFFSET, k] >= low
         if anyone:
             return tick + j
         order = link[order]

@@ -1054,7 +1054,10 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop,
         else:
             return INVALID_STATE
         if t_tick != t:
-            counters[MAY_BID] = 0  # the state changed: who may bid must be looked at again
+            # The state changed: who may bid must be looked at again (_earliest_bid). Not after a
+            # sample, which changes nothing a bid depends on (MAY_BID only picks the way to skip).
+            if t_uav == t or t_order == t:
+                counters[MAY_BID] = 0
             # While advertising is suspended, ticks are not held: the next one is the first
             # grid instant at or after now.
             counters[NEXT_TICK] = max(counters[NEXT_TICK], first_tick_at_or_after(t, interval))

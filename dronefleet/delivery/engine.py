@@ -616,6 +616,15 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
             _scan_terms(fleet.scan_terms, k, fleet.coef, fleet.intercept, fleet.soc_ref, fleet.t_ref, epoch, params,
                         fleet.idle_ids[k])
     terms = fleet.scan_terms
+    # :func:`_may_bid` with one margin for all slots, wider than each one's by F_MARGIN (1 + ...), far
+    # more than the rounding of either (|value| <= |w_distance x0| + |w_mass x1|): it passes wherever
+    # _may_bid does, and the per-slot test is a dot product and a comparison (value + offset rounds
+    # as in _may_bid). A tick it lets through in vain is an auction nobody bids in, as any other.
+    abs_distance = abs_mass = abs_intercept = 0.0
+    for k in range(n_idle):
+        abs_distance = max(abs_distance, abs(terms[SCAN_W_DISTANCE, k]))
+        abs_mass = max(abs_mass, abs(terms[SCAN_W_MASS, k]))
+        abs_intercept = max(abs_intercept, terms[SCAN_ABS_INTERCEPT, k])
     tree = book.queue_tree
     link = book.queue_next
     x_distance = book.x_distance
@@ -624,9 +633,10 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
     for j in range(end - tick):
         x0 = x_distance[order]
         x1 = x_mass[order]
+        low = -F_MARGIN * (2.0 + abs_intercept + 2.0 * (abs_distance * abs(x0) + abs_mass * abs(x1)))
         anyone = False
         for k in range(n_idle):  # no early exit: a branch-free loop the compiler can vectorise
-            anyone |= _may_bid(terms, k, x0, x1)
+            anyone |= terms[SCAN_W_DISTANCE, k] * x0 + terms[SCAN_W_MASS, k] * x1 + terms[SCAN_OFFSET, k] >= low
         if anyone:
             return tick + j
         order = link[order]
@@ -1044,7 +1054,10 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop,
         else:
             return INVALID_STATE
         if t_tick != t:
-            counters[MAY_BID] = 0  # the state changed: who may bid must be looked at again
+            # The state changed: who may bid must be looked at again (_earliest_bid). Not after a
+            # sample, which changes nothing a bid depends on (MAY_BID only picks the way to skip).
+            if t_uav == t or t_order == t:
+                counters[MAY_BID] = 0
             # While advertising is suspended, ticks are not held: the next one is the first
             # grid instant at or after now.
             counters[NEXT_TICK] = max(counters[NEXT_TICK], first_tick_at_or_after(t, interval))

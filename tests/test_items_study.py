@@ -41,7 +41,7 @@ def test_the_study_meets_the_figure_study_contract():
     assert set(hook.CHECK_CONFIGS) == set(hook.FIGURES) - {"items-fig01", "items-fig02"}
     listing = reproduce.list_studies()
     assert [line.split(":")[0] for line in listing.splitlines() if not line.startswith(" ")] == [
-        "delivery", "replenishment", "items"]
+        "delivery", "replenishment", "items", "lunar"]
     assert "items-fig12 items-ttests" in listing
 
 

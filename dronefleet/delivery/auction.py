@@ -65,7 +65,7 @@ from importlib.metadata import entry_points
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, typeof, types
+from numba import typeof, types
 from numba.core import compiler, typed_passes
 from numba.core.compiler_lock import global_compiler_lock
 from numba.core.compiler_machinery import FunctionPass, register_pass
@@ -75,7 +75,7 @@ from numba.core.registry import cpu_target
 
 from ..config import ConfigError, _suggest, brief
 from ..fpmath import log
-from ..jit import borrowing
+from ..jit import borrowing, njit
 from ..plugins import IMPORT_NOTICE_S, importing  # read at each import: tests shorten it
 
 logger = logging.getLogger(__name__)  # not ``log``: that is fpmath's logarithm here

@@ -6,9 +6,9 @@ fulfilment centre. Nothing here steps time.
 """
 
 import numpy as np
-from numba import njit
 
 from ..fpmath import exp
+from ..jit import njit
 
 SECONDS_PER_HOUR = 3600.0
 

@@ -21,12 +21,12 @@ the attempt table between calls.
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, types
+from numba import types
 
 from .auction import RULE_SIGNATURE, RULES, bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
 from ..fpmath import log
-from ..jit import borrowing
+from ..jit import borrowing, njit
 from .policy import decision, sgd_step
 from ..supervisor import take
 

@@ -3,9 +3,9 @@
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from ..fpmath import log
+from ..jit import njit
 from .config import Config
 
 #: Orders are drawn in fixed-size blocks so that the stream does not depend on the

@@ -17,9 +17,8 @@ scikit-learn is imported only by :func:`to_sgdclassifier`; the kernels never nee
 """
 
 import numpy as np
-from numba import njit
 
-from ..jit import borrowing
+from ..jit import borrowing, njit
 
 # WeightVector folds its scale into the weights when it falls below this (float64).
 _WSCALE_RESET = 1e-9

@@ -25,9 +25,9 @@ the controllable events' actions (5.3).
 """
 
 import numpy as np
-from numba import njit
 
 from ..fpmath import atan2, sincos
+from ..jit import njit
 from ..rng import normal_pair, uniform
 
 # Event codes: the columns of the kernel's transition tables (names without EV_).

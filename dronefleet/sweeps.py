@@ -566,6 +566,20 @@ def _part_columns(run: Run, table: str, schemas: Mapping[str, pyarrow.Schema]) -
     return {field.name: field.type for field in schemas[table] if field.name not in run.keys}
 
 
+def read_part(run: Run, out: Path, table: str) -> pyarrow.Table:
+    """``run``'s file of ``table`` in the dataset ``out`` as the scenario writes the table (the
+    run folder's file): the partition keys its schema holds put back as columns (their values
+    come from the path, so the file left them out), in the schema's order and types; its metadata
+    (config, provenance) kept. DataError naming the file as :func:`damage`."""
+    import pyarrow as pa
+
+    schema = run.scenario.table_schemas()[table]
+    data = read_parquet(run.path(out, table), _part_columns(run, table, {table: schema}), "part", exact=True)
+    columns = [pa.array([run.value(field.name)] * data.num_rows, field.type) if field.name in run.keys
+               else data.column(field.name) for field in schema]
+    return pa.Table.from_arrays(columns, schema=schema.with_metadata(data.schema.metadata))
+
+
 def damage(run: Run, out: Path) -> str | None:
     """Why the files of ``run`` (whose summary is there) cannot be used, in one line naming the
     file; None if they can.

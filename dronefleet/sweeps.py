@@ -110,7 +110,7 @@ from urllib.parse import quote, unquote
 
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, named_file, one_line, read_toml
-from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
+from .datafiles import DataError, check_columns, parquet_rows, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
 
@@ -587,10 +587,11 @@ def damage(run: Run, out: Path) -> str | None:
     Each table's file must be a regular parquet file of at most
     :data:`~dronefleet.datafiles.MAX_TABLE_BYTES` bytes whose footer reads, holding exactly the
     scenario's columns and types (:meth:`~dronefleet.scenarios.Scenario.table_schemas`, less the
-    partition keys) and the run's config in its metadata. The summary (one row per run, or per
-    trial) is read whole, so damage inside it is found too; the other tables are checked from
-    their footers alone (a truncated file has none): damage inside one of their pages is found
-    when they are read (:func:`rows`).
+    partition keys) and the run's config in its metadata. The summary must hold one row per
+    replicate of the run (delivery: one; replenishment, items: one per trial; lunar: per run) and
+    is read whole, so damage inside it is found too; the other tables are checked from their
+    footers alone (a truncated file has none), their numbers of rows not at all (a scenario gives
+    no bound for them): damage inside one of their pages is found when they are read (:func:`rows`).
 
     Raises SweepError if the summary was made with another config (the sweep file changed
     since): new results would silently mix with old ones.
@@ -599,11 +600,16 @@ def damage(run: Run, out: Path) -> str | None:
 
     schemas = run.scenario.table_schemas()
     expected = json.loads(run.config.to_json())
+    replicates = len(run.scenario.replicates(run.config) or range(1))
     for table in sorted(run.scenario.tables, key=lambda name: name != "summary"):  # the summary first
         path = run.path(out, table)
         columns = _part_columns(run, table, schemas)
         try:
             if table == "summary":
+                rows = parquet_rows(path, "part")  # from the footer: a summary of 1e9 rows is not read
+                if rows != replicates:
+                    raise DataError(f"part {str(path)!r} holds {rows:,} rows; the summary of run {run.partition} "
+                                    f"holds {replicates} (one per replicate)")
                 schema = read_parquet(path, columns, "part", exact=True).schema
             else:
                 schema = parquet_schema(path, "part")

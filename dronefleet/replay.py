@@ -34,7 +34,7 @@ __all__ = ["scenario_of_run", "page", "write", "is_dataset", "select_run", "writ
 log = logging.getLogger(__name__)
 
 #: Folder of a dataset where its runs' pages go by default (``_``: dataset readers skip it).
-DATASET_PAGES = "_replay"
+DATASET_PAGES = sweeps.PAGES_FOLDER
 #: At most this many values of a key are listed when a --run selection is refused.
 SHOWN_VALUES = 20
 

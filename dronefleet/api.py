@@ -35,8 +35,8 @@ from typing import TYPE_CHECKING, Any
 from . import scenarios
 from .config import ConfigError, _show, check_depth
 from .scenarios import Scenario
-from .sweeps import (MAX_RUNS, Progress, Sweep, _probe, available_cpus, check_layout, collect, run_sweep,
-                     sweep_of_document)
+from .sweeps import (MAX_RUNS, Progress, Sweep, _probe, available_cpus, check_collected, check_layout, collect,
+                     run_sweep, sweep_of_document)
 
 if TYPE_CHECKING:
     import pandas
@@ -306,8 +306,10 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         ``<results>/<name>``: a parquet dataset per table, partitioned by the grid keys and
         the seed key (read it with ``pandas.read_parquet(out / "orders")``), its
         ``collected.parquet``, and ``dronefleet replay out --run KEY=VALUE ...`` plays any of
-        its runs. Runs already done there (same config) are kept, not run again; a folder of
-        another layout, a file, or one that cannot be written is refused before any run.
+        its runs. Runs already done there (same config) are kept, not run again. A folder that
+        is not absent, empty or a dataset dronefleet wrote (e.g. ``out="."``), a dataset of
+        another layout or scenario, a ``collected.parquet`` that dronefleet did not write, a
+        file, or a folder that cannot be written is refused before any run.
         Default: a temporary folder, removed.
 
     Returns
@@ -357,7 +359,10 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         if not isinstance(out, (str, os.PathLike)):
             raise ConfigError(f"out={_show(out)}: expected the path of a folder for the sweep's dataset, or None")
         out = Path(out)
-        check_layout(planned, out)  # a dataset of other keys, a damaged _layout.json: before anything is made
+        # a folder of the user's files, a dataset of other keys or scenario, a damaged _layout.json, a
+        # collected.parquet collect did not write: before anything is made
+        check_layout(planned, out)
+        check_collected(out)
         _probe([out], f"out={_show(os.fspath(out))} must be a folder where files can be written", keep=False)
         return _run_and_collect(planned, out, workers)
     with tempfile.TemporaryDirectory(prefix="dronefleet-sweep-") as folder:

@@ -75,5 +75,4 @@ def check_output_file(path: str | os.PathLike, flag: str, allowed: str,
                    else "a device")
         raise OutputError(f"{shown} is {special}, which writing would replace with a regular file; {allowed}")
     if replaceable is not None and not replaceable(path):
-        raise OutputError(f"{shown} exists and is not {kind}, so it is not replaced: remove it or choose "
-                          f"another {flag}")
+        raise OutputError(f"{shown} exists and is not {kind}, so it is not replaced: remove it, or {allowed}")

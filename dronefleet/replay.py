@@ -34,7 +34,7 @@ __all__ = ["scenario_of_run", "page", "write", "is_dataset", "select_run", "writ
 log = logging.getLogger(__name__)
 
 #: Folder of a dataset where its runs' pages go by default (``_``: dataset readers skip it).
-DATASET_PAGES = "_replay"
+DATASET_PAGES = sweeps.PAGES_FOLDER
 #: At most this many values of a key are listed when a --run selection is refused.
 SHOWN_VALUES = 20
 
@@ -214,7 +214,10 @@ def select_run(dataset: Path, selection: list[str]) -> sweeps.Run:
 
 def _run_folder(run: sweeps.Run, dataset: Path, folder: Path) -> Path:
     """A run folder (``folder``/run) of ``run``'s tables in ``dataset``: its parts if all were
-    kept, else the run simulated again from its config, whose summary must be the part's."""
+    kept (with the partition keys a table's schema holds put back as its columns), else the run
+    simulated again from its config, whose summary must be the part's."""
+    import pyarrow.parquet as pq
+
     from .datafiles import DataError, read_parquet
 
     scenario, run_dir = run.scenario, folder / "run"
@@ -223,8 +226,12 @@ def _run_folder(run: sweeps.Run, dataset: Path, folder: Path) -> Path:
         if problem is not None:
             raise ConfigError(f"{problem}: run {run.partition} cannot be replayed (dronefleet sweep run redoes it)")
         run_dir.mkdir()
+        schemas = scenario.table_schemas()
         for table in scenario.tables:
-            (run_dir / f"{table}.parquet").symlink_to(run.path(dataset, table).absolute())
+            if any(key in schemas[table].names for key in run.keys):  # e.g. lunar's summary holds its layout
+                pq.write_table(sweeps.read_part(run, dataset, table), run_dir / f"{table}.parquet")
+            else:
+                (run_dir / f"{table}.parquet").symlink_to(run.path(dataset, table).absolute())
         return run_dir
     log.info(f"dronefleet replay: the tables of run {run.partition} were not kept; simulating it again from "
              f"its config ({scenario.seed_key} {run.value(scenario.seed_key)})")

@@ -61,7 +61,7 @@ The dataset of a sweep, under ``<results>/<name>/``::
 
     <table>/<key>=<value>/.../<seed key>=<N>/part-0.parquet   one file per run and table
     _failed/<run id>.json                               runs that raised or whose worker died, with the error
-    _layout.json                                        the partition keys: a sweep of other keys is refused
+    _layout.json                                        the partition keys and scenario: a sweep of others is refused
     collected.parquet                                   `sweep collect`: each run's summary rows
     <name>.sbatch, _logs/                               `sweep plan`: job-array script, its logs
 
@@ -73,16 +73,22 @@ the keys of any of its tables), then the seed key (``seed``, ``first_trial``); v
 ``str(value)`` of the config's value (``15.0``, ``3``, ``random``), percent-encoded as hive
 readers expect, so one layout holds every run of a ``[[grid]]`` union (a key that a table
 does not name has the run's value from the base or ``[set]``). A file holds no column named
-like a partition key (only delivery's ``summary`` repeats config values: they come back from
-the path), because readers refuse a column that is both. Directories starting with ``_`` are
+like a partition key (delivery's and lunar's ``summary`` repeat config values: they come back
+from the path, and :func:`read_part` puts them back as the run folder's table holds them),
+because readers refuse a column that is both. Directories starting with ``_`` are
 skipped by dataset readers.
+
+A dataset folder is absent, empty, a dataset or holds only what dronefleet writes there
+(:func:`check_layout`): a sweep never writes among the user's files, nor replaces a
+``collected.parquet`` that ``collect`` did not write (:func:`check_collected`).
 
 A run is done when its ``summary`` file (written last, atomically, like every file) exists
 and carries the run's config, and the scenario does not find it outdated (delivery: its
 ``fleet_file`` written again since; see :func:`state`): a sweep started again skips done runs
 and redoes the others, replacing what an interrupted attempt wrote. (A kill in the middle of
 a write can leave a hidden ``.part-0.parquet.<pid>.tmp``, which readers ignore.)
-A run with a file that cannot be used (truncated, garbled, other columns, no config: see
+A run with a file that cannot be used (truncated, garbled, other columns, no config, a
+summary of another number of rows than the run's replicates: see
 :func:`damage`) is damaged: not done, named in one line wherever it is met, redone by a
 sweep run. Side files (``_layout.json``, ``_failed/`` records) are read as data
 (:func:`dronefleet.datafiles.read_json`: a regular file of at most 1 MB, nested at most 32
@@ -110,7 +116,7 @@ from urllib.parse import quote, unquote
 
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, named_file, one_line, read_toml
-from .datafiles import DataError, check_columns, parquet_schema, parse_json, read_json, read_parquet
+from .datafiles import DataError, check_columns, parquet_rows, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
 
@@ -566,6 +572,20 @@ def _part_columns(run: Run, table: str, schemas: Mapping[str, pyarrow.Schema]) -
     return {field.name: field.type for field in schemas[table] if field.name not in run.keys}
 
 
+def read_part(run: Run, out: Path, table: str) -> pyarrow.Table:
+    """``run``'s file of ``table`` in the dataset ``out`` as the scenario writes the table (the
+    run folder's file): the partition keys its schema holds put back as columns (their values
+    come from the path, so the file left them out), in the schema's order and types; its metadata
+    (config, provenance) kept. DataError naming the file as :func:`damage`."""
+    import pyarrow as pa
+
+    schema = run.scenario.table_schemas()[table]
+    data = read_parquet(run.path(out, table), _part_columns(run, table, {table: schema}), "part", exact=True)
+    columns = [pa.array([run.value(field.name)] * data.num_rows, field.type) if field.name in run.keys
+               else data.column(field.name) for field in schema]
+    return pa.Table.from_arrays(columns, schema=schema.with_metadata(data.schema.metadata))
+
+
 def damage(run: Run, out: Path) -> str | None:
     """Why the files of ``run`` (whose summary is there) cannot be used, in one line naming the
     file; None if they can.
@@ -573,10 +593,11 @@ def damage(run: Run, out: Path) -> str | None:
     Each table's file must be a regular parquet file of at most
     :data:`~dronefleet.datafiles.MAX_TABLE_BYTES` bytes whose footer reads, holding exactly the
     scenario's columns and types (:meth:`~dronefleet.scenarios.Scenario.table_schemas`, less the
-    partition keys) and the run's config in its metadata. The summary (one row per run, or per
-    trial) is read whole, so damage inside it is found too; the other tables are checked from
-    their footers alone (a truncated file has none): damage inside one of their pages is found
-    when they are read (:func:`rows`).
+    partition keys) and the run's config in its metadata. The summary must hold one row per
+    replicate of the run (delivery: one; replenishment, items: one per trial; lunar: per run) and
+    is read whole, so damage inside it is found too; the other tables are checked from their
+    footers alone (a truncated file has none), their numbers of rows not at all (a scenario gives
+    no bound for them): damage inside one of their pages is found when they are read (:func:`rows`).
 
     Raises SweepError if the summary was made with another config (the sweep file changed
     since): new results would silently mix with old ones.
@@ -585,11 +606,16 @@ def damage(run: Run, out: Path) -> str | None:
 
     schemas = run.scenario.table_schemas()
     expected = json.loads(run.config.to_json())
+    replicates = len(run.scenario.replicates(run.config) or range(1))
     for table in sorted(run.scenario.tables, key=lambda name: name != "summary"):  # the summary first
         path = run.path(out, table)
         columns = _part_columns(run, table, schemas)
         try:
             if table == "summary":
+                rows = parquet_rows(path, "part")  # from the footer: a summary of 1e9 rows is not read
+                if rows != replicates:
+                    raise DataError(f"part {str(path)!r} holds {rows:,} rows; the summary of run {run.partition} "
+                                    f"holds {replicates} (one per replicate)")
                 schema = read_parquet(path, columns, "part", exact=True).schema
             else:
                 schema = parquet_schema(path, "part")
@@ -643,17 +669,26 @@ def state(run: Run, out: Path) -> str:
 
 # --------------------------------------------------------------------------- one partition layout per dataset
 
-#: In a dataset folder, the partition keys of its runs, written when its first runs start.
+#: In a dataset folder, the partition keys of its runs and their scenario, written when its first runs start.
 LAYOUT_FILE = "_layout.json"
+#: In a dataset folder, the summary rows of its done runs (``sweep collect``).
+COLLECTED_FILE = "collected.parquet"
+#: The metadata key of a collected table that holds its sweep: only such a file is replaced.
+SWEEP_KEY = b"dronefleet.sweep"
+#: In a dataset folder, the folder of its runs' replay pages (``dronefleet replay DATASET --run ...``).
+PAGES_FOLDER = "_replay"
+#: Folders dronefleet makes in a dataset beside its tables: failure records, job logs, replay pages.
+SIDE_FOLDERS = ("_failed", "_logs", PAGES_FOLDER)
 
 
-def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[str, ...] | None:
-    """The partition keys of the dataset ``out``: from its :data:`LAYOUT_FILE` or, in a dataset
-    written before that file existed, from the partition directories of its ``tables``; None if
-    it holds none."""
+def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[tuple[str, ...], str | None] | None:
+    """The partition keys of the dataset ``out`` and its scenario: from its :data:`LAYOUT_FILE` (the
+    scenario None if written before the file held it) or, in a dataset written before that file
+    existed, the keys from the partition directories of its ``tables`` (and the scenario None);
+    None if it holds none."""
     record = out / LAYOUT_FILE
     if os.path.lexists(record):
-        return _layout_keys(record, out)
+        return _read_layout(record, out)
     try:
         for table in tables:
             keys, folder = [], out / table
@@ -664,37 +699,87 @@ def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[str, ...] | None:
                     break
                 keys.append(folder.name.split("=", 1)[0])
             if keys:
-                return tuple(keys)
+                return tuple(keys), None
     except OSError as error:
         raise SweepError(f"cannot read the partition layout of the dataset {out} ({error.strerror or error})") from None
     return None
 
 
-def _layout_keys(record: Path, out: Path) -> tuple[str, ...]:
-    """The partition keys the layout file ``record`` holds: ``{"keys": [names]}``, read as data
-    (a regular file of at most :data:`~dronefleet.datafiles.MAX_JSON_BYTES` bytes, nested at
-    most :data:`~dronefleet.datafiles.MAX_JSON_DEPTH` deep); SweepError naming it otherwise."""
-    fix = f'its {LAYOUT_FILE} holds {{"keys": [...]}}: fix or remove it'
+def _read_layout(record: Path, out: Path) -> tuple[tuple[str, ...], str | None]:
+    """The partition keys and the scenario (None in a record written before it held one) of the
+    layout file ``record``: ``{"keys": [names], "scenario": name}``, read as data (a regular file
+    of at most :data:`~dronefleet.datafiles.MAX_JSON_BYTES` bytes, nested at most
+    :data:`~dronefleet.datafiles.MAX_JSON_DEPTH` deep); SweepError naming it otherwise."""
+    fix = f'its {LAYOUT_FILE} holds {{"keys": [...], "scenario": "..."}}: fix or remove it'
     try:
         document = read_json(record, LAYOUT_FILE)
     except DataError as error:
         raise SweepError(f"cannot read the partition layout of the dataset {out}: {error}; {fix}") from None
     keys = document.get("keys") if isinstance(document, dict) else None
-    if not (isinstance(keys, list) and keys and set(document) == {"keys"}
-            and all(isinstance(key, str) and key.isidentifier() for key in keys)):
+    scenario = document.get(SCENARIO_KEY) if isinstance(document, dict) else None
+    if not (isinstance(keys, list) and keys and set(document) <= {"keys", SCENARIO_KEY}
+            and all(isinstance(key, str) and key.isidentifier() for key in keys)
+            and (scenario is None or isinstance(scenario, str))):
         raise SweepError(f"cannot read the partition layout of the dataset {out}: {str(record)!r} is not "
-                         f"{{\"keys\": [names of config keys]}}; {fix}")
-    return tuple(keys)
+                         f"{{\"keys\": [names of config keys], \"scenario\": name}}; {fix}")
+    return tuple(keys), scenario
+
+
+def _part_scenario(part: Path) -> str:
+    """The name of the scenario whose config the summary part ``part`` holds; DataError if it holds none."""
+    from .records import read_config_dict
+
+    return read_config_dict(part, "part").get(SCENARIO_KEY, "delivery")
+
+
+def _found_scenario(out: Path, keys: tuple[str, ...]) -> str | None:
+    """The scenario of the dataset ``out`` (partitioned by ``keys``) written before its layout file
+    recorded it: that of its first summary part whose config reads; None if it holds no summary
+    part. SweepError (one line) if none can be read: a sweep could then replace another scenario's
+    runs as damaged ones."""
+    unreadable = None
+    for part in (out / "summary").glob("/".join(f"{key}=*" for key in keys) + "/part-0.parquet"):
+        try:
+            return _part_scenario(part)
+        except DataError as error:  # a damaged part: another one tells
+            unreadable = error
+    if unreadable is not None:
+        raise SweepError(f"cannot tell the scenario of the dataset {out}, written before {LAYOUT_FILE} recorded it: "
+                         f"no summary part holds a readable config ({unreadable}); remove the dataset or use "
+                         "another [sweep] name or --results")
+    return None
+
+
+def _check_owned(sweep: Sweep, out: Path) -> None:
+    """Refuse a folder ``out`` that is not absent, empty, a dataset (its :data:`LAYOUT_FILE`, or the
+    partitions of one written before it) or a folder of only what dronefleet writes there (the
+    script and logs of ``sweep plan``): a sweep would write among the user's files and replace them."""
+    if not out.is_dir() or os.path.lexists(out / LAYOUT_FILE):
+        return
+    ours = {*sweep.scenario.tables, LAYOUT_FILE, COLLECTED_FILE, f"{sweep.name}.sbatch", *SIDE_FOLDERS}
+    try:
+        foreign = sorted(name for name in os.listdir(out) if name not in ours)
+    except OSError as error:
+        raise SweepError(f"cannot read the folder {out} ({error.strerror or error})") from None
+    if foreign and _found_layout(out, sweep.scenario.tables) is None:
+        more = f" and {len(foreign) - 1} more" if len(foreign) > 1 else ""
+        raise SweepError(f"{out} is not a sweep dataset and holds files dronefleet did not write "
+                         f"({_shown(foreign[0], 40)}{more}), which a sweep could replace: give an absent or empty "
+                         "folder, or a dataset dronefleet wrote (another --results or [sweep] name, or out=)")
 
 
 def check_layout(sweep: Sweep, out: Path) -> None:
-    """Refuse a sweep whose partition keys differ from those of the dataset already in ``out``, or
-    whose dataset has something else than a folder where a table's files go.
+    """Refuse a folder ``out`` that is not the sweep's dataset: a folder of other files (see
+    :func:`_check_owned`), a dataset of other partition keys or of another scenario, or one that
+    has something else than a folder where a table's files go.
 
     The grid decides the layout: a sweep of the same name with a grid key moved to [set]
     would write a second layout beside the first, and readers of the folder would then see
-    runs twice (DuckDB refuses it: "Hive partition mismatch").
+    runs twice (DuckDB refuses it: "Hive partition mismatch"). Two scenarios may share a layout
+    (items and replenishment, both ``trials/first_trial``): a sweep of one would take the runs of
+    the other for damaged ones and replace them.
     """
+    _check_owned(sweep, out)
     for table in sweep.scenario.tables:  # every run of the table would fail at it: said once, before any
         folder = out / table
         if os.path.lexists(folder) and not folder.is_dir():
@@ -702,18 +787,39 @@ def check_layout(sweep: Sweep, out: Path) -> None:
                              "is not a folder: move or remove it")
     keys = sweep.runs[0].keys
     found = _found_layout(out, sweep.scenario.tables)
-    if found is not None and found != keys:
-        raise SweepError(f"{out} holds a dataset partitioned by {'/'.join(found)}; this sweep partitions by "
+    if found is None:
+        return
+    if found[0] != keys:
+        raise SweepError(f"{out} holds a dataset partitioned by {'/'.join(found[0])}; this sweep partitions by "
                          f"{'/'.join(keys)}: use another [sweep] name or --results")
+    scenario = found[1] or _found_scenario(out, keys)
+    if scenario is not None and scenario != sweep.scenario.name:
+        raise SweepError(f"{out} holds a dataset of the {_shown(scenario, 40)} scenario; this sweep is of "
+                         f"{sweep.scenario.name}: use another [sweep] name or --results")
+
+
+def check_collected(out: Path) -> None:
+    """Refuse (OutputError, one line) a :data:`COLLECTED_FILE` in the dataset ``out`` that ``collect``
+    must not replace: a folder, a special file, or a file that it did not write (without :data:`SWEEP_KEY`)."""
+    def collected(path: Path) -> bool:
+        try:
+            return SWEEP_KEY in (parquet_schema(path).metadata or {})
+        except DataError:
+            return False
+
+    check_output_file(out / COLLECTED_FILE, "the summary table", "give the sweep another folder (another --results "
+                      "or [sweep] name, or out=)", replaceable=collected,
+                      kind="a summary table that dronefleet sweep collect wrote")
 
 
 def _record_layout(sweep: Sweep, out: Path) -> None:
-    """Write ``out``/:data:`LAYOUT_FILE` (atomically) if it is not there yet."""
+    """Write ``out``/:data:`LAYOUT_FILE` (atomically) if it is not there yet or does not name the
+    scenario (:func:`check_layout` found it from the parts)."""
     from .records import write_atomic
 
     record = out / LAYOUT_FILE
-    if not record.exists():
-        text = json.dumps({"keys": list(sweep.runs[0].keys)}) + "\n"
+    if not record.exists() or _read_layout(record, out)[1] is None:
+        text = json.dumps({"keys": list(sweep.runs[0].keys), SCENARIO_KEY: sweep.scenario.name}) + "\n"
         write_atomic(record, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
@@ -991,10 +1097,11 @@ def dataset_parts(out: Path) -> tuple[tuple[str, ...], list[tuple[dict[str, str]
 
     SweepError (one line) if ``out`` holds no dataset, or more runs than a sweep may hold.
     """
-    keys = _found_layout(out, ("summary",)) if out.is_dir() else None
-    if keys is None:
+    found = _found_layout(out, ("summary",)) if out.is_dir() else None
+    if found is None:
         raise SweepError(f"{out} holds no sweep dataset: no {LAYOUT_FILE} and no summary/<key>=<value>/... "
                          "folders (give the folder dronefleet sweep run wrote, <results>/<sweep name>)")
+    keys = found[0]
     pattern = "/".join(f"{key}=*" for key in keys) + "/part-0.parquet"
     parts = []
     for part in sorted((out / "summary").glob(pattern)):
@@ -1009,10 +1116,7 @@ def dataset_run(out: Path, keys: tuple[str, ...], part: Path) -> Run:
     """The run whose summary part in the dataset ``out`` (partitioned by ``keys``) is ``part``,
     from the config the part holds; DataError naming the part if it cannot be read, holds no
     valid config, or that of another run than the folder it lies in (moved, tampered with)."""
-    from .records import read_config_dict
-
-    name = read_config_dict(part, "part").get(SCENARIO_KEY, "delivery")
-    scenario = scenarios.get(name, f"part {str(part)!r}: ")
+    scenario = scenarios.get(_part_scenario(part), f"part {str(part)!r}: ")
     run = Run(scenario.read_config(part), keys, scenario)
     if run.path(out, "summary") != part:
         raise DataError(f"part {str(part)!r} holds the config of run {run.partition}, not of the folder it "
@@ -1036,7 +1140,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
 
     Written atomically to ``out/collected.parquet``, with the sweep file in the metadata
     (key ``dronefleet.sweep``). Returns ``(table, the runs not done)``. A path there that is
-    not a regular file, or a write that fails (disk full), is an OutputError (one line).
+    not a regular file, a file that collect did not write (the user's: :func:`check_collected`),
+    or a write that fails (disk full), is an OutputError (one line).
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -1045,8 +1150,8 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
     from .records import write_atomic
 
     done = done_runs(sweep, out)
-    path = out / "collected.parquet"
-    check_output_file(path, "the summary table", "move it away or give another --results")
+    path = out / COLLECTED_FILE
+    check_collected(out)
     schema = _partition_schema(sweep)
     columns = _part_columns(sweep.runs[0], "summary", sweep.scenario.table_schemas())
     rows = []
@@ -1054,7 +1159,7 @@ def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
         summary = read_parquet(run.path(out, "summary"), columns, "part", exact=True)
         partition = {key: pa.array([run.value(key)] * summary.num_rows, schema.field(key).type) for key in run.keys}
         rows.append(pa.table({**partition, **dict(zip(summary.column_names, summary.columns))}))
-    table = stamp(pa.concat_tables(rows).replace_schema_metadata({b"dronefleet.sweep": sweep.text}))
+    table = stamp(pa.concat_tables(rows).replace_schema_metadata({SWEEP_KEY: sweep.text}))
     with writing(path):
         write_atomic(path, lambda tmp: pq.write_table(table, tmp))
     finished = set(done)
@@ -1236,7 +1341,7 @@ def collect_command(args: argparse.Namespace) -> int:
     sweep, out = _open(args)
     table, not_done = collect(sweep, out)
     print(f"sweep {sweep.name}: {len(sweep.runs) - len(not_done)} of {len(sweep.runs)} runs in "
-          f"{out / 'collected.parquet'} ({table.num_rows} rows, {table.num_columns} columns)")
+          f"{out / COLLECTED_FILE} ({table.num_rows} rows, {table.num_columns} columns)")
     if not_done:
         log.warning(f"  {len(not_done)} runs are not done (see sweep status); they have no row")
     return 1 if not_done else 0

@@ -268,3 +268,26 @@ def test_a_plugin_in_the_calling_script_is_refused_before_a_sweep_with_workers(t
     assert done.returncode == 0, done.stderr
     message, = done.stdout.splitlines()
     assert message.startswith("rule='__main__:fullest' ") and "jobs=1" in message
+
+
+@pytest.mark.parametrize("folder", ["of files", "working directory", "of a summary table"])
+def test_a_sweep_never_writes_over_files_it_did_not_write(folder, tmp_path, monkeypatch):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    pq.write_table(pa.table({"mine": [1.5]}), mine / "collected.parquet")
+    if folder != "of a summary table":
+        (mine / "notes.txt").write_text("mine")
+    out = mine
+    if folder == "working directory":
+        monkeypatch.chdir(mine)
+        out = "."
+    before = {path: path.read_bytes() for path in mine.iterdir()}
+    with pytest.raises(ConfigError) as refused:
+        dronefleet.sweep({"rule": ["random"]}, seeds=[0], set=TINY["delivery"], jobs=1, out=out)
+    message = str(refused.value)
+    assert "\n" not in message and ("notes.txt" in message if folder != "of a summary table" else
+                                    "is not a summary table that dronefleet sweep collect wrote" in message), message
+    assert {path: path.read_bytes() for path in mine.iterdir()} == before

@@ -44,17 +44,19 @@ def outcome(read, *args):
         return one_line(error)
 
 
+ROWS = {**dict.fromkeys(delivery.TABLES, 2), "summary": 1}
 SAMPLE = {pa.types.is_integer: 1, pa.types.is_floating: 0.5, pa.types.is_string: "x", pa.types.is_boolean: True}
 
 
 def made_up(config):
-    """Two rows of every table of the delivery scenario, of its declared columns and types."""
-    def column(kind):
+    """Rows of every table of the delivery scenario, of its declared columns and types: two, and
+    the summary's one (a run is one replicate)."""
+    def column(kind, rows):
         if pa.types.is_list(kind):
-            return [[1], []]
-        return [next(value for test, value in SAMPLE.items() if test(kind))] * 2
+            return [[1], []][:rows]
+        return [next(value for test, value in SAMPLE.items() if test(kind))] * rows
 
-    return {table: pa.table({field.name: pa.array(column(field.type), field.type) for field in schema})
+    return {table: pa.table({field.name: pa.array(column(field.type, ROWS[table]), field.type) for field in schema})
             for table, schema in delivery.table_schemas().items()}
 
 
@@ -157,7 +159,7 @@ def test_any_damage_to_a_part_gives_a_state_and_readers_a_result_or_a_data_error
         read = outcome(sw.rows, s, out, table, data)
         assert isinstance(read, (pa.Table, ConfigError))
         if isinstance(read, pa.Table):
-            assert read.num_rows == 2 * len(data.files)
+            assert read.num_rows == ROWS[table] * len(data.files)
         collected = outcome(sw.collect, s, out)
         assert isinstance(collected, (tuple, ConfigError))
 

@@ -345,7 +345,7 @@ def test_grid_keys_in_another_order_are_the_same_sweep_with_one_layout(tmp_path,
                for path in (results / "smoke" / "summary").rglob("*.parquet")}
     assert layouts == {("rule", "tau_minutes", "seed")}
     layout = results / "smoke" / "_layout.json"
-    assert json.loads(layout.read_text()) == {"keys": ["rule", "tau_minutes", "seed"]}  # written by the first run
+    assert json.loads(layout.read_text()) == {"keys": ["rule", "tau_minutes", "seed"], "scenario": "delivery"}  # written by the first run
     # the same name with rule moved to [set]: refused, not a second layout beside the first
     moved = tmp_path / "moved.toml"
     moved.write_text(text.replace(rule_first, 'tau_minutes = [15.0, 30.0]\n').replace("[set]\n", '[set]\nrule = "random"\n'))
@@ -357,7 +357,7 @@ def test_grid_keys_in_another_order_are_the_same_sweep_with_one_layout(tmp_path,
     assert run_cli(["sweep", "run", str(moved), "--results", str(results), "--jobs", "1"]) == 2
     assert cli.main(["sweep", "run", str(SMOKE), "--results", str(results), "--jobs", "1"]) == 0
     assert "ran 0, skipped 8 done before" in capsys.readouterr().out
-    assert json.loads(layout.read_text()) == {"keys": ["rule", "tau_minutes", "seed"]}
+    assert json.loads(layout.read_text()) == {"keys": ["rule", "tau_minutes", "seed"], "scenario": "delivery"}
 
 
 # ---------------------------------------------------------------------------- a killed sweep leaves no process
@@ -630,3 +630,106 @@ def test_a_layout_write_that_fails_is_one_line(tmp_path, capsys, monkeypatch, no
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.splitlines()) == 1, err
     assert f"cannot write {str(tmp_path / 'smoke' / '_layout.json')!r}: No space left on device" in err
+
+
+# ---------------------------------------------------------------------------- files a sweep does not own
+
+
+def test_a_folder_of_the_users_files_is_never_a_sweeps_dataset(tmp_path, capsys, no_array):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    results = tmp_path / "results"
+    mine = results / "smoke"   # the folder the sweep's dataset would be
+    mine.mkdir(parents=True)
+    pq.write_table(pa.table({"x": [1]}), mine / "collected.parquet")
+    (mine / "notes.txt").write_text("mine")
+    before = snapshot(tmp_path)
+    for command in ("run", "status", "collect"):
+        assert run_cli(["sweep", command, str(SMOKE), "--results", str(results)]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and len(err.splitlines()) == 1, err
+        assert f"{mine} is not a sweep dataset and holds files dronefleet did not write ('notes.txt')" in err, err
+        assert snapshot(tmp_path) == before
+
+
+def test_collect_never_replaces_a_summary_table_it_did_not_write(tiny_done, capsys):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    collected = tiny_done / "results" / "tiny" / "collected.parquet"
+    args = ["sweep", "collect", str(tiny_done / "tiny.toml"), "--results", str(tiny_done / "results")]
+    assert run_cli(args) == 0   # its own is written again
+    assert run_cli(args) == 0
+    pq.write_table(pa.table({"mine": [1.5]}), collected)
+    before = collected.read_bytes()
+    capsys.readouterr()
+    assert run_cli(args) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and f"{str(collected)!r} exists and is not a summary table that dronefleet " \
+        "sweep collect wrote, so it is not replaced" in err, err
+    assert collected.read_bytes() == before
+    collected.unlink()
+
+
+# ---------------------------------------------------------------------------- one scenario per dataset
+
+#: Items and replenishment sweeps over trials have one layout: trials/first_trial.
+TRIALS = """[sweep]
+name = "shared"
+scenario = "{scenario}"
+[set]
+{fixed}
+[grid]
+trials = [2]
+"""
+
+
+@pytest.fixture(scope="module")
+def replenishment_dataset(tmp_path_factory):
+    """A results root holding the replenishment dataset "shared", partitioned by trials/first_trial."""
+    root = tmp_path_factory.mktemp("shared")
+    (root / "replenishment.toml").write_text(TRIALS.format(scenario="replenishment", fixed="ticks = 200"))
+    (root / "items.toml").write_text(TRIALS.format(scenario="items", fixed="steps = 50"))
+    assert cli.main(["-q", "sweep", "run", str(root / "replenishment.toml"), "--results", str(root / "results"),
+                     "--jobs", "1"]) == 0
+    return root
+
+
+@pytest.mark.parametrize("record", ["with its scenario", "without (an older dataset)", "none (an older dataset)"])
+def test_a_sweep_of_another_scenario_never_enters_a_dataset_of_the_same_layout(replenishment_dataset, tmp_path,
+                                                                                capsys, no_array, record):
+    import shutil
+
+    results = shutil.copytree(replenishment_dataset / "results", tmp_path / "results")
+    layout = results / "shared" / "_layout.json"
+    assert json.loads(layout.read_text()) == {"keys": ["trials", "first_trial"], "scenario": "replenishment"}
+    if record == "without (an older dataset)":
+        layout.write_text('{"keys": ["trials", "first_trial"]}\n')
+    elif record == "none (an older dataset)":
+        layout.unlink()
+    before = snapshot(tmp_path)
+    for command in ("run", "status", "collect"):
+        assert run_cli(["sweep", command, str(replenishment_dataset / "items.toml"), "--results", str(results)]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and len(err.splitlines()) == 1, err
+        assert f"{results / 'shared'} holds a dataset of the 'replenishment' scenario; this sweep is of items" in err
+        assert snapshot(tmp_path) == before
+    # its own scenario's sweep goes on, and records the scenario in an older dataset's layout
+    assert run_cli(["sweep", "run", str(replenishment_dataset / "replenishment.toml"), "--results", str(results)]) == 0
+    assert json.loads(layout.read_text())["scenario"] == "replenishment"
+
+
+def test_an_older_dataset_whose_scenario_cannot_be_told_is_refused_not_replaced(replenishment_dataset, tmp_path,
+                                                                               capsys, no_array):
+    import shutil
+
+    results = shutil.copytree(replenishment_dataset / "results", tmp_path / "results")
+    (results / "shared" / "_layout.json").unlink()
+    part = next((results / "shared" / "summary").rglob("part-0.parquet"))
+    part.write_bytes(part.read_bytes()[:100])
+    before = snapshot(tmp_path)
+    assert run_cli(["sweep", "run", str(replenishment_dataset / "items.toml"), "--results", str(results)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and f"cannot tell the scenario of the dataset {results / 'shared'}" in err, err
+    assert snapshot(tmp_path) == before

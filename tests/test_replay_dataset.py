@@ -152,3 +152,31 @@ def test_folder_names_are_shown_on_one_line(dataset, capsys):
     odd.mkdir(parents=True)
     shutil.copy(dataset / "summary" / PART, odd / "part-0.parquet")
     _refused(capsys, ["replay", str(dataset), "--run", "rule=x"], "rule = a b\\x1b[31m, least_confident, random")
+
+
+LUNAR = """[sweep]
+name = "ls"
+scenario = "lunar"
+[set]
+runs = 1
+n_robots = 10
+duration_s = 30.0
+[grid]
+layout = ["OPEN", "SOFT-RT"]
+battery_wh = [5.0]
+"""
+
+
+def test_a_run_of_a_sweep_over_keys_its_summary_holds_is_played_with_them_put_back(tmp_path, capsys):
+    # lunar's summary holds layout and battery_wh: a part leaves them out (they are in its path)
+    _sweep(tmp_path, LUNAR)
+    dataset = tmp_path / "ls"
+    kept, again = tmp_path / "kept.html", tmp_path / "again.html"
+    assert cli.main(["replay", str(dataset), "--run", "battery_wh=5.0", "--run", "layout=OPEN",
+                     "--out", str(kept)]) == 0
+    assert "layout" not in pq.read_schema(dataset / "summary" / "battery_wh=5.0/layout=OPEN/first_run=0/part-0.parquet").names
+    for table in ("timeseries", "trips", "snapshots"):  # the run simulated again gives the same page
+        (dataset / table / "battery_wh=5.0/layout=OPEN/first_run=0/part-0.parquet").unlink()
+    assert cli.main(["replay", str(dataset), "--run", "layout=OPEN", "--run", "battery_wh=5", "--out", str(again)]) == 0
+    assert embedded(kept) == embedded(again)
+    assert embedded(kept)["source"] == "sweep dataset ls, run battery_wh=5.0/layout=OPEN/first_run=0"

@@ -87,6 +87,13 @@ def retyped(path):
     rewrite(path, lambda t: t.set_column(0, t.field(0).name, pa.array([str(v) for v in t.column(0).to_pylist()])))
 
 
+def float_for_int(path):   # the same values, as another writer may give them
+    def change(t):
+        i = next(i for i, field in enumerate(t.schema) if pa.types.is_integer(field.type))
+        return t.set_column(i, t.field(i).name, t.column(i).cast(pa.float64()))
+    rewrite(path, change)
+
+
 def another_config(path):
     document = json.loads(pq.read_schema(path).metadata[CONFIG_KEY])
     section = next(name for name, keys in document.items() if "n_uavs" in keys)
@@ -110,7 +117,7 @@ def folder(path):
 
 
 DAMAGES = [truncated, garbled_footer, without_config, with_a_column_more, with_a_partition_column, retyped,
-           to_dev_zero, fifo]
+           float_for_int, to_dev_zero, fifo]
 
 
 @pytest.mark.parametrize("table", ["summary", "orders"])
@@ -163,6 +170,23 @@ def test_sweep_run_redoes_a_damaged_run_replacing_its_files(copy, capsys, damage
     assert [sw.inspect(run, out) for run in s.runs] == [("done", None)] * 4
     assert part.is_file() and not part.is_symlink()
     assert not list(out.rglob("*.tmp"))
+
+
+@pytest.mark.parametrize("rows", [0, 2, 1000])
+def test_a_summary_of_another_number_of_rows_than_its_runs_replicates_is_damage(copy, capsys, rows):
+    path, results, s, out = copy
+    part = s.runs[1].path(out, "summary")   # a delivery run is one replicate: one row
+    rewrite(part, lambda t: t.take(pa.array([0] * rows, pa.int64())))
+    assert run_cli(["sweep", "status", str(path), "--results", str(results)]) == 1
+    captured = capsys.readouterr()
+    assert "3 done, 0 missing, 0 failed, 1 damaged" in captured.out
+    assert f"damaged  {s.runs[1].partition}: part {str(part)!r} holds {rows:,} rows; the summary of run" in captured.out
+    assert run_cli(["sweep", "collect", str(path), "--results", str(results)]) == 1
+    assert pq.read_table(out / "collected.parquet").num_rows == 3
+    capsys.readouterr()
+    assert run_cli(["sweep", "run", str(path), "--results", str(results), "--jobs", "1"]) == 0
+    assert "ran 1, skipped 3 done before" in capsys.readouterr().out
+    assert pq.read_metadata(part).num_rows == 1
 
 
 def test_a_part_that_cannot_be_replaced_fails_its_run_and_the_others_go_on(copy, capsys):

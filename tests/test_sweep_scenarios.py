@@ -73,7 +73,7 @@ def test_a_sweep_of_every_scenario_plans_runs_resumes_and_collects(name, tmp_pat
     assert cli.main(["sweep", "run", str(path), "--results", str(results), "--jobs", "2"]) == 0
     assert "ran 2, skipped 2 done before, 0 failed" in capsys.readouterr().out
     assert cli.main(["sweep", "status", str(path), "--results", str(results)]) == 0
-    assert json.loads((out / "_layout.json").read_text()) == {"keys": list(keys)}
+    assert json.loads((out / "_layout.json").read_text()) == {"keys": list(keys), "scenario": name}
 
     assert cli.main(["sweep", "collect", str(path), "--results", str(results)]) == 0
     assert "4 of 4 runs" in capsys.readouterr().out

@@ -446,29 +446,35 @@ class _Deliverable:
 DELIVERABLE = _Deliverable()
 
 
-def _studies(registry: Mapping[str, scenarios.Scenario]) -> dict[str, FigureStudy]:
-    """The studies of the scenarios of ``registry`` by name: delivery's is :data:`DELIVERABLE`, any
-    other's its ``study()`` hook, if it has one."""
-    found = {}
-    for name, scenario in registry.items():
-        study = DELIVERABLE if name == "delivery" else scenario.study
-        if study is not None:
-            found[name] = study
-    return found
+def _study(name: str, scenario: scenarios.Scenario) -> FigureStudy | None:
+    """The study of scenario ``name``: delivery's is :data:`DELIVERABLE`, any other's its ``study()`` hook, if any."""
+    return DELIVERABLE if name == "delivery" else scenario.study
 
 
 def studies() -> dict[str, FigureStudy]:
-    """Every study by its scenario's name, of every registered scenario (built-in, then installed).
-    ConfigError if two name one figure."""
-    found = _studies(scenarios.loading())
-    owners = {}
-    for name, study in found.items():
-        for figure in study.FIGURES:
-            if figure in owners or figure == "all":
-                raise ConfigError(f"scenario {name!r} names its figure {figure!r}, which "
-                                  f"{'is the word for every figure' if figure == 'all' else f'{owners[figure]!r} has'}"
-                                  ": its study's figures need other names")
-            owners[figure] = name
+    """Every study by its scenario's name, of every scenario that loads (built-in, then installed:
+    :func:`dronefleet.scenarios.loading`). An installed scenario's study that fails (its ``study()``
+    raises) or names a figure another study has (or ``all``) is left out with a warning: it stops
+    no other study."""
+    found, owners = {}, {}
+    for name, scenario in scenarios.loading().items():
+        try:
+            study = _study(name, scenario)
+            figures = () if study is None else tuple(study.FIGURES)
+        except Exception as error:  # the installed package's own error, whatever it is: the user must see it
+            if name in scenarios.SCENARIOS:
+                raise  # a built-in study's is a bug of ours: its traceback
+            scenarios.warn_left_out(name, f"its study fails: {type(error).__name__}: {error}".splitlines()[0])
+            continue
+        taken = next((figure for figure in figures if figure in owners or figure == "all"), None)
+        if taken is not None:
+            whose = "is the word for every figure" if taken == "all" else f"{owners[taken]!r} has"
+            scenarios.warn_left_out(name, f"its study names its figure {taken!r}, which {whose}: "
+                                          f"its study's figures need other names")
+            continue
+        if study is not None:
+            found[name] = study
+            owners.update(dict.fromkeys(figures, name))
     return found
 
 
@@ -486,7 +492,8 @@ def owner(figure: str) -> FigureStudy:
 
 
 #: The built-in studies' figures (a scenario installed from another package adds its own: :func:`all_figures`).
-FIGURES = tuple(figure for study in _studies(scenarios.SCENARIOS).values() for figure in study.FIGURES)
+FIGURES = tuple(figure for name, scenario in scenarios.SCENARIOS.items()
+                if (study := _study(name, scenario)) is not None for figure in study.FIGURES)
 
 
 def _check_theta(study, figures, redraw):

@@ -20,10 +20,12 @@ Registered are:
 * scenarios installed from other packages as entry points of the group ``dronefleet.scenarios``
   (:data:`dronefleet.contract.ENTRY_POINT_GROUP`), ``name = "package.module"`` or
   ``"package.module:object"``. One is loaded when a config, sweep or call names it (or
-  ``reproduce`` lists every study); one that fails to import, or does not meet the contract
-  (:func:`dronefleet.contract.contract_problems`), is refused in one line naming the entry
-  point where something names it (:func:`get`), left out with a warning from the lists of
-  every scenario (:func:`loading`), and one named like a built-in is refused.
+  ``reproduce`` lists every study), its import tried first in a child process
+  (:func:`dronefleet.plugins.importing`); one that fails to import, hangs or ends the process
+  when imported, does not meet the contract (:func:`dronefleet.contract.contract_problems`), or
+  whose name two installed distributions declare, is refused in one line naming the entry point
+  where something names it (:func:`get`) and left out with a warning from the lists of every
+  scenario (:func:`loading`); one named like a built-in is left out with a warning.
 """
 
 from __future__ import annotations
@@ -46,7 +48,8 @@ from .plugins import importing
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["Scenario", "SCENARIOS", "installed", "registered", "loading", "get", "scenario_of", "load"]
+__all__ = ["Scenario", "SCENARIOS", "installed", "registered", "loading", "warn_left_out", "get", "scenario_of",
+           "load"]
 
 logger = logging.getLogger(__name__)
 
@@ -213,7 +216,12 @@ SCENARIOS: dict[str, Scenario] = {
 @functools.cache  # successes only: a refused entry point raises, and is tried again next time
 def _load_entry_point(name: str) -> Any:
     """The scenario object of the installed entry point ``name``, checked against the contract."""
-    entry_point = next(iter(entry_points(group=ENTRY_POINT_GROUP, name=name)))
+    declared = entry_points(group=ENTRY_POINT_GROUP, name=name)
+    if len(declared) > 1:  # which one Python finds first depends on sys.path's order: neither is chosen
+        raise ConfigError(f"the {ENTRY_POINT_GROUP} entry point {name!r} is declared by several installed "
+                          f"distributions: {', '.join(sorted(f'{e.dist.name} ({e.value})' for e in declared))}; "
+                          f"uninstall all but one")
+    entry_point = next(iter(declared))
     where = f"the {ENTRY_POINT_GROUP} entry point {name!r} ({entry_point.value})"
     try:
         with importing(entry_point.module, f"scenario {name!r}"):
@@ -231,14 +239,15 @@ def _load_entry_point(name: str) -> Any:
 
 def installed() -> dict[str, Scenario]:
     """The scenarios installed as entry points of :data:`~dronefleet.contract.ENTRY_POINT_GROUP`, by name
-    (read from the packages' metadata; nothing is imported until one is used). ConfigError if one is
-    named like a built-in: it would never run, so it is refused rather than silently shadowed."""
+    (read from the packages' metadata; nothing is imported until one is used). One named like a built-in
+    would never run: it is left out, said in a warning, rather than silently shadowed."""
     found = {}
     for entry_point in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
         if entry_point.name in SCENARIOS:
-            raise ConfigError(f"the {ENTRY_POINT_GROUP} entry point {entry_point.name!r} ({entry_point.value}) "
-                              f"is named like the built-in scenario: rename it in its package's pyproject.toml, "
-                              f"or uninstall it")
+            warn_left_out(entry_point.name, f"the {ENTRY_POINT_GROUP} entry point {entry_point.name!r} "
+                                            f"({entry_point.value}) is named like the built-in scenario, which is "
+                                            f"what runs: rename it in its package's pyproject.toml, or uninstall it")
+            continue
         found[entry_point.name] = Scenario(entry_point.name, functools.partial(_load_entry_point, entry_point.name))
     return found
 
@@ -248,9 +257,10 @@ def registered() -> dict[str, Scenario]:
     return {**SCENARIOS, **installed()}
 
 
-@functools.cache  # once per scenario and process: every list of the scenarios meets it
-def _warn_left_out(name: str, why: str) -> None:
-    logger.warning(f"dronefleet: warning: scenario {name!r} left out: {why}")
+@functools.cache  # once per scenario, reason and process: every list of the scenarios meets it
+def warn_left_out(name: str, why: str) -> None:
+    """Say, once, that the installed scenario ``name`` is left out of the lists of scenarios, and ``why``."""
+    logger.warning(f"dronefleet: warning: installed scenario {name!r} left out: {why}")
 
 
 def loading() -> dict[str, Scenario]:
@@ -264,7 +274,7 @@ def loading() -> dict[str, Scenario]:
             try:
                 _load_entry_point(name)
             except ConfigError as error:
-                _warn_left_out(name, str(error))
+                warn_left_out(name, str(error))
                 continue
         found[name] = scenario
     return found

@@ -14,6 +14,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 from conftest import ALWAYS, NEVER, run_state, scenario, scenario_config
+from test_scenario_contract import dronefleet_process
 
 import dronefleet
 from dronefleet import cli
@@ -232,6 +233,19 @@ def test_a_rule_that_breaks_the_contract_while_running_stops_the_run_in_one_line
 
 def test_an_int_score_is_still_a_score(rules_module):
     assert resolve_rule(f"{rules_module}:int_score").code == PLUGIN
+
+
+@pytest.mark.parametrize("source, fragment", [
+    ("import os\nos._exit(0)\n", "its import ends the process (exit status 0)"),
+    ("import time\ntime.sleep(3600)\n", "its import does not end within 5 s"),
+])
+def test_a_plugin_module_whose_import_ends_the_process_or_hangs_is_refused_in_one_line(tmp_path, source, fragment):
+    (tmp_path / "ending.py").write_text(source)
+    done = dronefleet_process(tmp_path, "run", "--set", "rule=ending:rule", "--out", tmp_path / "out")
+    assert done.returncode == 2 and len(done.stderr.splitlines()) == 1, done.stderr
+    assert done.stderr.startswith("dronefleet: error: auction.rule = 'ending:rule' names module 'ending', which "
+                                  f"cannot be imported (ImportError: {fragment}"), done.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_a_plugin_module_slow_to_import_is_said(tmp_path, monkeypatch, caplog):

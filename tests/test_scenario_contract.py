@@ -7,8 +7,10 @@ import itertools
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -76,11 +78,13 @@ def test_the_contract_names_what_a_scenario_lacks():
 # ---------------------------------------------------------------- installed from another package
 
 
-def install(folder, name, value, module=None, text=""):
-    """An installed distribution declaring the entry point ``name = value``, and ``module.py`` holding ``text``."""
-    dist = folder / f"{name}_scenario-0.1.dist-info"
+def install(folder, name, value, module=None, text="", distribution=None):
+    """An installed distribution (by default ``<name>-scenario``) declaring the entry point ``name = value``,
+    and ``module.py`` holding ``text``."""
+    distribution = distribution or f"{name}-scenario"
+    dist = folder / f"{distribution.replace('-', '_')}-0.1.dist-info"
     dist.mkdir()
-    (dist / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}-scenario\nVersion: 0.1\n")
+    (dist / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {distribution}\nVersion: 0.1\n")
     (dist / "entry_points.txt").write_text(f"[{ENTRY_POINT_GROUP}]\n{name} = {value}\n")
     if module:
         (folder / f"{module}.py").write_text(text)
@@ -129,13 +133,115 @@ def test_an_installed_scenario_that_fails_to_load_or_breaks_the_contract_is_refu
         scenarios.get(name)
 
 
-def test_an_installed_scenario_named_like_a_built_in_is_refused(tmp_path, monkeypatch, capsys):
+def walk(name, extra=""):
+    """The example scenario's module as the scenario ``name``, with ``extra`` appended."""
+    return WALK.replace('NAME = "random_walk"', f'NAME = "{name}"') + extra
+
+
+def dronefleet_process(folder, *argv, limit_s=5.0):
+    """``dronefleet argv`` in a process of its own (a broken plugin may end it), with the packages installed
+    in ``folder`` and its plugin imports bounded at ``limit_s`` seconds (the shipped bound is 30 s)."""
+    script = ("import sys; from dronefleet import cli, plugins; plugins.IMPORT_LIMIT_S = float(sys.argv[1]); "
+              "sys.exit(cli.main(sys.argv[2:]))")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(map(str, (folder, ROOT)))}
+    # the bound only detects a hang of the code before the fix: the limit ends a hanging import in seconds
+    return subprocess.run([sys.executable, "-c", script, str(limit_s), *map(str, argv)], capture_output=True,
+                          text=True, env=env, cwd=folder, timeout=240)
+
+
+#: Installed scenarios broken one way each: (the module text of scenario ``name``, what the warning says).
+BROKEN = {
+    "study raises": (lambda name: walk(name, "\n\ndef study():\n    raise RuntimeError('no study today')\n"),
+                     "its study fails: RuntimeError: no study today"),
+    "study takes fig10": (lambda name: walk(name, STUDY.format(figures='"fig10",')),
+                          "its study names its figure 'fig10', which 'replenishment' has"),
+    "import hangs": (lambda name: "import time\ntime.sleep(3600)\n", "fails to load: ImportError: its import "
+                                                                       "does not end within 5 s"),
+    "import calls os._exit": (lambda name: "import os\nos._exit(0)\n",
+                              "fails to load: ImportError: its import ends the process (exit status 0)"),
+    "import kills itself": (lambda name: "import os, signal\nos.kill(os.getpid(), signal.SIGKILL)\n",
+                            "fails to load: ImportError: its import kills the process (SIGKILL)"),
+}
+
+
+@pytest.mark.parametrize("broken", [*BROKEN, "named delivery"])
+def test_one_broken_installed_scenario_leaves_out_only_itself(tmp_path, broken):
+    if broken == "named delivery":
+        name, entry, fragment = "delivery", "the dronefleet.scenarios entry point 'delivery' (impostor)", \
+            "is named like the built-in scenario"
+        install(tmp_path, name, "impostor")
+    else:
+        name = next(NAMES)
+        text, fragment = BROKEN[broken]
+        install(tmp_path, name, f"{name}_module", f"{name}_module", text(name))
+        entry = f"installed scenario {name!r} left out"
+    # the built-in studies are listed, the broken one left out in one warning line
+    listed = dronefleet_process(tmp_path, "reproduce", "--list")
+    assert listed.returncode == 0, listed.stderr
+    assert all(figure in listed.stdout.split() for figure in ("fig16", "fig10", "items-fig03", "lunar-fig03"))
+    assert len(listed.stderr.splitlines()) == 1 and "left out" in listed.stderr, listed.stderr
+    assert entry in listed.stderr and fragment in listed.stderr, listed.stderr
+    # a built-in figure is still drawn
+    shutil.copytree(ROOT / "results" / "fig10", tmp_path / "figures" / "fig10",
+                    ignore=shutil.ignore_patterns("*.png", "*.pdf", "*.svg"))
+    drawn = dronefleet_process(tmp_path, "reproduce", "fig10", "--redraw", "--jobs", "1", "--out", "figures")
+    assert drawn.returncode == 0 and "Traceback" not in drawn.stderr, drawn.stderr
+    assert (tmp_path / "figures" / "fig10" / "fig10.png").is_file()
+    if "import" in broken:  # what names it is refused in one line naming it
+        ran = dronefleet_process(tmp_path, "run", config_file(tmp_path, name), "--out", tmp_path / "out")
+        assert ran.returncode == 2 and len(ran.stderr.splitlines()) == 1, ran.stderr
+        assert f"entry point '{name}' ({name}_module)" in ran.stderr and fragment in ran.stderr, ran.stderr
+        assert not (tmp_path / "out").exists()
+
+
+def test_an_installed_scenario_named_like_a_built_in_is_left_out(tmp_path, monkeypatch, capsys):
     install(tmp_path, "delivery", "impostor")
     monkeypatch.syspath_prepend(str(tmp_path))
-    message = f"the {ENTRY_POINT_GROUP} entry point 'delivery' (impostor) is named like the built-in scenario"
-    refused(capsys, ["reproduce", "--list"], message)
-    refused(capsys, ["run", config_file(tmp_path, "nosuch")], message)
+    assert "delivery" not in scenarios.installed() and "delivery" in scenarios.loading()
     assert scenarios.get("delivery") is scenarios.SCENARIOS["delivery"]  # the built-in is what a config runs
+    assert "is named like the built-in scenario" in capsys.readouterr().err
+
+
+def test_one_scenario_name_of_two_installed_packages_is_refused_naming_both(tmp_path, monkeypatch, capsys):
+    name = next(NAMES)
+    for distribution in ("alpha-walks", "beta-walks"):
+        module = f"{name}_{distribution[:4]}"
+        install(tmp_path, name, module, module, walk(name), distribution)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    both = f"is declared by several installed distributions: alpha-walks ({name}_alph), beta-walks ({name}_beta)"
+    refused(capsys, ["run", config_file(tmp_path, name), "--out", tmp_path / "out"], f"entry point '{name}'", both)
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(SystemExit) as stop:
+        cli.main(["reproduce", "--list"])
+    printed = capsys.readouterr()
+    assert stop.value.code == 0 and "fig16" in printed.out and name not in printed.out
+    assert len(printed.err.splitlines()) == 1 and "left out" in printed.err and both in printed.err
+
+
+def test_ctrl_c_while_a_plugin_import_is_tried_exits_130_and_ends_the_try(tmp_path):
+    name = next(NAMES)
+    started = tmp_path / "started"
+    install(tmp_path, name, f"{name}_module", f"{name}_module",
+            f"import os, time\nopen({str(started)!r} + '.tmp', 'w').write(str(os.getpid()))\n"
+            f"os.replace({str(started)!r} + '.tmp', {str(started)!r})\ntime.sleep(3600)\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(map(str, (tmp_path, ROOT)))}
+    process = subprocess.Popen([sys.executable, "-m", "dronefleet.cli", "reproduce", "--list"], env=env, cwd=tmp_path,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        for _ in range(2400):  # a generous bound (240 s) on the start of the import, not a timing
+            if started.exists() or process.poll() is not None:
+                break
+            time.sleep(0.1)
+        importer = int(started.read_text())
+        assert importer != process.pid  # tried in a child process, not in dronefleet's own
+        process.send_signal(signal.SIGINT)
+        err = process.communicate(timeout=240)[1]
+    finally:
+        process.kill()
+    assert process.returncode == 130 and "Traceback" not in err, err
+    assert err.splitlines()[-1] == f"dronefleet: interrupted while importing module '{name}_module' of scenario '{name}'"
+    with pytest.raises(ProcessLookupError):  # the child was ended and reaped
+        os.kill(importer, 0)
 
 
 @pytest.mark.parametrize("text", [
@@ -237,14 +343,6 @@ def test_an_installed_scenarios_study_is_listed_and_reproduced(tmp_path, monkeyp
     assert f"{name}: random walks\n  {name}-fig1\n" in capsys.readouterr().out
     assert cli.main(["reproduce", f"{name}-fig1", "--out", str(tmp_path / "out")]) == 0
     assert pq.read_table(tmp_path / "out" / f"{name}-fig1" / "robots.parquet").num_rows == 4
-
-
-def test_an_installed_study_naming_a_figure_of_another_is_refused(tmp_path, monkeypatch, capsys):
-    name = next(NAMES)
-    install(tmp_path, name, f"{name}_module", f"{name}_module",
-            WALK.replace('NAME = "random_walk"', f'NAME = "{name}"') + STUDY.format(figures='"fig16",'))
-    monkeypatch.syspath_prepend(str(tmp_path))
-    refused(capsys, ["reproduce", "--list"], f"scenario '{name}' names its figure 'fig16', which 'delivery' has")
 
 
 @pytest.fixture(scope="module")

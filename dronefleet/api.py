@@ -36,7 +36,7 @@ from . import scenarios
 from .config import ConfigError, _show, check_depth
 from .scenarios import Scenario
 from .sweeps import (MAX_RUNS, Progress, Sweep, _probe, available_cpus, check_layout, collect, run_sweep,
-                     sweep_of_document)
+                     simulate, sweep_of_document)
 
 if TYPE_CHECKING:
     import pandas
@@ -211,6 +211,11 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
         (:class:`dronefleet.delivery.simulation.RunTooLargeError`), a supervisor that refuses
         an event (:class:`dronefleet.supervisor.SupervisorError`); ``dronefleet run`` reports
         the same in one line.
+    dronefleet.scenarios.HookError
+        (a RuntimeError) A hook of an installed scenario that calls ``sys.exit``, raises (other than
+        a ConfigError), returns what the contract does not allow, or whose ``simulate`` (run in a
+        process of its own) ends that process: one line naming the scenario, the hook and what
+        was wrong.
 
     Examples
     --------
@@ -224,7 +229,7 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
     scenario, path = _source(config, "config")
     changes = _changes(scenario, set, overrides, seed)
     resolved = scenario.replace(scenario.load(path), changes)
-    return Run(scenario, resolved, scenario.simulate(resolved))
+    return Run(scenario, resolved, simulate(scenario, resolved))
 
 
 def _bounded_list(values: Iterable, argument: str, what: str) -> list:

@@ -1199,7 +1199,7 @@ def run_command(args: argparse.Namespace) -> int:
     log.debug(f"  sweep file {sweep.path}")
     start = time.perf_counter()
     try:
-        with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # its first run runs here
+        with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # with --jobs 1 its runs run here
             ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
     except KeyboardInterrupt:
         log.warning(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")

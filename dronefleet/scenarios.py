@@ -99,7 +99,7 @@ class Scenario:
     @property
     def builtin(self) -> bool:
         """Whether it is one of :data:`SCENARIOS` (trusted), not installed from another package."""
-        return SCENARIOS.get(self.name) is self
+        return SCENARIOS.get(self.name) == self  # equal, not the same: a worker process gets a copy
 
     def problem(self, hook: str, what: str) -> HookError:
         """The HookError of this scenario's ``hook``: ``what`` it did wrong."""

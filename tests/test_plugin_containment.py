@@ -9,6 +9,7 @@ test's own process survives the old behaviour."""
 import itertools
 import json
 import os
+import pickle
 import signal
 import subprocess
 import sys
@@ -20,7 +21,7 @@ import pytest
 from test_scenario_contract import ROOT, WALK, config_file, install, refused
 
 import dronefleet
-from dronefleet import cli
+from dronefleet import cli, scenarios
 from dronefleet.scenarios import HookError
 
 NAMES = (f"contained{n}" for n in itertools.count())  # imports and entry points are cached: a name per test
@@ -147,6 +148,12 @@ def test_ctrl_c_or_sigterm_of_a_contained_simulate_ends_it_and_its_process(tmp_p
 
 
 # --------------------------------------------------------------------------- what hooks return
+
+
+def test_a_built_in_stays_trusted_in_a_worker_process_and_an_installed_one_is_checked(tmp_path, monkeypatch):
+    # a sweep's worker gets a copy of the scenario: a built-in's own errors (RunTooLargeError) must stay theirs
+    assert pickle.loads(pickle.dumps(scenarios.SCENARIOS["delivery"])).builtin
+    assert not pickle.loads(pickle.dumps(scenarios.get(plugin(tmp_path, monkeypatch, "")))).builtin
 
 
 @pytest.mark.parametrize("hooks, fragment", [

@@ -354,7 +354,7 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     document = {"sweep": head, "set": dict(set or {}), "grid": _grid(grid)}
     planned = sweep_of_document(document, Path(SWEEP_LABEL), "")
     workers = jobs or available_cpus()
-    if workers > 1 and len(planned.runs) > 1:
+    if workers > 1:  # every run then runs in a worker, a single one too
         _check_workers_can_import(document)
     # kept in collected.parquet; only now, when every key and value is known to be one a config holds
     planned = dataclasses.replace(planned, text=json.dumps(document, default=str))

@@ -257,8 +257,9 @@ def contained(function: Callable[[Item], Result], item: Item) -> Result:
         codes = [process.exitcode for process in workers if process.exitcode is not None]
         pool.shutdown()
         code = codes[0] if codes else None
+        signals = {int(signum): signum.name for signum in signal.Signals}
         raise WorkerDied("no exit code" if code is None else f"exit code {code}" if code >= 0
-                         else f"killed by {signal.Signals(-code).name}") from None
+                         else f"killed by {signals.get(-code, f'signal {-code}')}") from None
     except BaseException:
         if future.done():  # the item raised: its worker is as good as new
             _release(pool)

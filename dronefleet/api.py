@@ -36,7 +36,7 @@ from . import scenarios
 from .config import ConfigError, _show, check_depth
 from .scenarios import Scenario
 from .sweeps import (MAX_RUNS, Progress, Sweep, _probe, available_cpus, check_collected, check_layout, collect,
-                     run_sweep, sweep_of_document)
+                     run_sweep, simulate, sweep_of_document)
 
 if TYPE_CHECKING:
     import pandas
@@ -211,6 +211,11 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
         (:class:`dronefleet.delivery.simulation.RunTooLargeError`), a supervisor that refuses
         an event (:class:`dronefleet.supervisor.SupervisorError`); ``dronefleet run`` reports
         the same in one line.
+    dronefleet.scenarios.HookError
+        (a RuntimeError) A hook of an installed scenario that calls ``sys.exit``, raises (other than
+        a ConfigError), returns what the contract does not allow, or whose ``simulate`` (run in a
+        process of its own) ends that process: one line naming the scenario, the hook and what
+        was wrong.
 
     Examples
     --------
@@ -224,7 +229,7 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
     scenario, path = _source(config, "config")
     changes = _changes(scenario, set, overrides, seed)
     resolved = scenario.replace(scenario.load(path), changes)
-    return Run(scenario, resolved, scenario.simulate(resolved))
+    return Run(scenario, resolved, simulate(scenario, resolved))
 
 
 def _bounded_list(values: Iterable, argument: str, what: str) -> list:
@@ -351,7 +356,7 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     document = {"sweep": head, "set": dict(set or {}), "grid": _grid(grid)}
     planned = sweep_of_document(document, Path(SWEEP_LABEL), "")
     workers = jobs or available_cpus()
-    if workers > 1 and len(planned.runs) > 1:
+    if workers > 1:  # every run then runs in a worker, a single one too
         _check_workers_can_import(document)
     # kept in collected.parquet; only now, when every key and value is known to be one a config holds
     planned = dataclasses.replace(planned, text=json.dumps(document, default=str))

@@ -189,11 +189,12 @@ def run_scenario(scenario: scenarios.Scenario, args: argparse.Namespace) -> int:
     log.debug(f"  config {config.to_json()}")
     start = time.perf_counter()
     with console.compile_notice(f"the {scenario.name} kernel"):
-        tables = scenario.simulate(config)
+        tables = sweeps.simulate(scenario, config)  # an installed scenario's in a process of its own
     wall = time.perf_counter() - start
+    summary = scenario.format_summary(tables)  # before the write: a hook that fails leaves no run folder
     with writing(out):
         write_tables(tables, out, config, overwrite=args.overwrite)
-    log.info(scenario.format_summary(tables))
+    log.info(summary)
     log.info(f"  {'wall time':<22}{wall:.2f} s")
     log.info(f"  {'tables':<22}{out}/{{{','.join(tables)}}}.parquet")
     _write_replay(args, out)
@@ -474,7 +475,8 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser(reproduce_arguments="reproduce" in argv).parse_args(argv)
         console.configure(args.level)
         return args.func(args)
-    except ConfigError as error:  # bad input (config, sweep, fleet file): refused before any work
+    # bad input (config, sweep, fleet file), refused before any work; a scenario's hook that broke its contract
+    except (ConfigError, scenarios.HookError) as error:
         print(f"dronefleet: error: {error}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as interrupted:  # Ctrl-C: outputs are complete or absent (see records.write_run)

@@ -135,13 +135,49 @@ def reused_workers() -> Iterator[None]:
             pool.shutdown()
 
 
+def _worker_pool():
+    """A pool of one worker process: a kept idle one (see :func:`reused_workers`) or a new one,
+    which starts no process until its first submit."""
+    if _kept:
+        return _kept.pop()
+    from loky import ProcessPoolExecutor  # imported with a worker process only
+    from loky.backend import get_context
+
+    # "loky", not "loky_init_main", which runs the main module as spawn does
+    return ProcessPoolExecutor(1, context=get_context("loky"), initializer=_start_worker, initargs=(os.getpid(),))
+
+
+def _release(pool):
+    if _kept is None:
+        pool.shutdown()
+    else:
+        _kept.append(pool)
+
+
+def _submit(pool, function, item):
+    """``function(item)`` on ``pool``'s worker (see :func:`_interruptible`): its future."""
+    # A worker starts in the submit: with SIGINT blocked, which it inherits, so that a Ctrl-C
+    # while it starts up is no traceback of its own (as multiprocessing's resource tracker
+    # does); it is delivered here once unblocked.
+    signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
+    try:
+        return pool.submit(_interruptible, function, item)
+    finally:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
+
+
+def _workers(pool):
+    return list((pool._processes or {}).values())  # the pool's worker (a private attribute)
+
+
 def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) -> Outcomes[Item, Result]:
     """``function`` over ``items`` on ``jobs`` processes of this machine.
 
-    The first item runs in this process before any worker starts: it compiles the engine
-    into numba's disk cache (or loads it from there), so that the workers load it rather
-    than each compiling it at the same time (~20 s of CPU each). With ``jobs == 1`` every
-    item runs in this process, which a crash then stops. Workers are new interpreters, not
+    With ``jobs == 1`` every item runs in this process, which a crash (or a kill, as by the
+    out-of-memory killer) of one item then stops. Otherwise every item runs in a worker, the
+    first one alone before the others start: it compiles the engine into numba's disk cache (or
+    loads it from there), so that the other workers load it rather than each compiling it at the
+    same time (~20 s of CPU each). Workers are new interpreters, not
     forks (a fork of a process with threads, numba's or pyarrow's, can deadlock), started by
     loky rather than multiprocessing's ``spawn``: they import ``function``'s module but never
     the caller's main module, which ``spawn`` runs again in every worker (an unguarded
@@ -159,46 +195,19 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
     ones end without writing more (see :func:`_interruptible`), the others never start.
     """
     items = deque(items)
-    if not items:
-        return
-    first = items.popleft()
-    yield first, function(first), None
     if jobs == 1:
         for item in items:
             yield item, function(item), None
         return
-    from loky import ProcessPoolExecutor  # imported with a sweep of several processes only
-    from loky.backend import get_context
-
-    context = get_context("loky")  # not "loky_init_main", which runs the main module as spawn does
-
-    def worker_pool():
-        if _kept:
-            return _kept.pop()
-        return ProcessPoolExecutor(1, context=context, initializer=_start_worker, initargs=(os.getpid(),))
-
-    def release(pool):
-        if _kept is None:
-            pool.shutdown()
-        else:
-            _kept.append(pool)
-
     holding = {}  # future -> (its pool, its item)
 
     def submit(pool):
         item = items.popleft()
-        # A worker starts in the submit: with SIGINT blocked, which it inherits, so that a
-        # Ctrl-C while it starts up is no traceback of its own (as multiprocessing's resource
-        # tracker does); it is delivered here once unblocked.
-        signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
-        try:
-            holding[pool.submit(_interruptible, function, item)] = pool, item
-        finally:
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
+        holding[_submit(pool, function, item)] = pool, item
 
     try:
-        for _ in range(min(jobs, len(items))):
-            submit(worker_pool())
+        if items:
+            submit(_worker_pool())  # the first alone: the others start once it has compiled the kernels
         while holding:
             finished, _ = wait(holding, return_when=FIRST_COMPLETED)
             for future in finished:
@@ -206,19 +215,62 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
                 result, error = _outcome(future)
                 if isinstance(error, BrokenProcessPool):  # its worker died: a new one takes its place
                     pool.shutdown()
-                    pool = worker_pool()  # starts no process until a submit
+                    pool = _worker_pool()  # starts no process until a submit
                 if items:
                     submit(pool)  # before the yield: the worker does not wait for the caller
                 else:
-                    release(pool)
+                    _release(pool)
+                while items and len(holding) < jobs:
+                    submit(_worker_pool())
                 yield item, result, error
     finally:
         for pool, _ in holding.values():  # on Ctrl-C: stop the items running; the others never start
-            for process in (pool._processes or {}).values():  # the pool's worker (a private attribute)
+            for process in _workers(pool):
                 with contextlib.suppress(ProcessLookupError):
                     os.kill(process.pid, signal.SIGINT)
         for pool, _ in holding.values():
             pool.shutdown()
+
+
+class WorkerDied(RuntimeError):
+    """The worker process of :func:`contained` ended without returning: ``how`` says how
+    (``exit code 0``, ``killed by SIGKILL``)."""
+
+    def __init__(self, how: str) -> None:
+        super().__init__(how)
+        self.how = how
+
+
+def contained(function: Callable[[Item], Result], item: Item) -> Result:
+    """``function(item)`` in a worker process of its own, as :func:`local` runs an item: its result,
+    or what it raised, raised here; :class:`WorkerDied` if the worker ends without either (the
+    item called ``os._exit``, was killed, crashed). Ctrl-C and SIGTERM here end the worker at once
+    (SIGKILL: the item only computes, this process writes what it returns) and are raised."""
+    pool = _worker_pool()
+    future = _submit(pool, function, item)
+    workers = _workers(pool)
+    try:
+        result = future.result()
+    except BrokenProcessPool:
+        for process in workers:
+            process.join()
+        codes = [process.exitcode for process in workers if process.exitcode is not None]
+        pool.shutdown()
+        code = codes[0] if codes else None
+        signals = {int(signum): signum.name for signum in signal.Signals}
+        raise WorkerDied("no exit code" if code is None else f"exit code {code}" if code >= 0
+                         else f"killed by {signals.get(-code, f'signal {-code}')}") from None
+    except BaseException:
+        if future.done():  # the item raised: its worker is as good as new
+            _release(pool)
+        else:  # Ctrl-C or SIGTERM here while the item runs: a plugin that ignores them must not hold us
+            for process in workers:
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(process.pid, signal.SIGKILL)
+            pool.shutdown(wait=False)
+        raise
+    _release(pool)
+    return result
 
 
 def dask(function: Callable[[Item], Result], items: Iterable[Item], scheduler: str,

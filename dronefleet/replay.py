@@ -235,7 +235,7 @@ def _run_folder(run: sweeps.Run, dataset: Path, folder: Path) -> Path:
         return run_dir
     log.info(f"dronefleet replay: the tables of run {run.partition} were not kept; simulating it again from "
              f"its config ({scenario.seed_key} {run.value(scenario.seed_key)})")
-    tables = scenario.simulate(run.config)
+    tables = sweeps.simulate(scenario, run.config)
     part = run.path(dataset, "summary")
     again = tables["summary"].drop_columns([key for key in run.keys if key in tables["summary"].column_names])
     stored = read_parquet(part, dict(zip(again.column_names, again.schema.types)), "part", exact=True)

@@ -656,7 +656,7 @@ def command(args: argparse.Namespace) -> int:
                  f"{f'values that differ: {len(differences)}' if differences else 'every value identical'} "
                  f"({time.perf_counter() - start:.1f} s)")
         return 1 if differences else 0
-    with console.compile_notice("a simulation kernel"):  # the sweeps' first runs run in this process
+    with console.compile_notice("a simulation kernel"):  # with --jobs 1 the sweeps' runs run here
         reproduce(figures, root, args.quick, args.jobs, args.redraw, theta=args.theta)
     log.info(f"reproduce {named}: done in {time.perf_counter() - start:.1f} s, "
              f"under {Path(root) / 'quick' if args.quick else root}")

@@ -30,9 +30,10 @@ Registered are:
 
 from __future__ import annotations
 
-import os
 import functools
 import importlib
+import json
+import os
 import logging
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
@@ -41,17 +42,26 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .config import SCENARIO_KEY, ConfigError, _show, _suggest, read_toml
+from .config import SCENARIO_KEY, ConfigError, _show, _suggest, one_line, read_toml
 from .contract import ENTRY_POINT_GROUP, FigureStudy, Field, contract_problems
 from .plugins import importing
 
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["Scenario", "SCENARIOS", "installed", "registered", "loading", "warn_left_out", "get", "scenario_of",
-           "load"]
+__all__ = ["Scenario", "HookError", "SCENARIOS", "installed", "registered", "loading", "warn_left_out", "get",
+           "scenario_of", "load"]
 
 logger = logging.getLogger(__name__)
+
+
+class HookError(RuntimeError):
+    """A scenario's hook that exits, raises, returns what the contract does not allow or (an installed
+    scenario's ``simulate``, in a process of its own) ends its process: one line naming the scenario,
+    the hook and what was wrong. ``dronefleet`` reports it with exit code 2."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(one_line(message))  # a plugin's error may hold many lines
 
 
 @dataclass(frozen=True)
@@ -89,65 +99,121 @@ class Scenario:
     def seeds_required(self) -> bool:
         return self.module.SEEDS_REQUIRED
 
+    @property
+    def builtin(self) -> bool:
+        """Whether it is one of :data:`SCENARIOS` (trusted), not installed from another package."""
+        return SCENARIOS.get(self.name) == self  # equal, not the same: a worker process gets a copy
+
+    def problem(self, hook: str, what: str) -> HookError:
+        """The HookError of this scenario's ``hook``: ``what`` it did wrong."""
+        return HookError(f"scenario {self.name!r}: its {hook} {what}")
+
+    def _hook(self, hook: str, *args: Any) -> Any:
+        """The scenario's ``hook`` called with ``args``. One that calls ``sys.exit`` is a HookError (it
+        would end the command silently); so is an installed scenario's that raises anything but a
+        ConfigError (its refusal of bad input). A built-in's errors are its documented ones
+        (RunTooLargeError, ...), passed on as they are."""
+        try:
+            return getattr(self.module, hook)(*args)
+        except SystemExit as exiting:
+            raise self.problem(hook, f"called sys.exit({exiting.code!r})") from None
+        except ConfigError:
+            raise
+        except Exception as error:
+            if self.builtin:
+                raise
+            raise self.problem(hook, f"raised {type(error).__name__}: {error}") from error
+
+    def _text(self, hook: str, *args: Any) -> str:
+        text = self._hook(hook, *args)
+        if not isinstance(text, str):
+            raise self.problem(hook, f"returned {type(text).__name__}, not a text (str)")
+        return text
+
     def load(self, path: str | os.PathLike | None = None, overrides: Iterable[str] = (),
              seed: int | None = None) -> Any:
-        return self.module.load(path, overrides, seed)
+        config = self._hook("load", path, overrides, seed)
+        if not callable(getattr(config, "to_json", None)):  # every command hashes or stores its JSON
+            raise self.problem("load", f"returned {type(config).__name__}, not a config (with to_json and to_dict)")
+        return config
 
     def resolve_key(self, key: str) -> str:
-        return self.module.resolve_key(key)
+        return self._hook("resolve_key", key)
 
     def replace(self, config: Any, changes: Mapping[str, Any]) -> Any:
-        return self.module.replace(config, changes)
+        return self._hook("replace", config, changes)
 
     def value(self, config: Any, name: str) -> Any:
-        return self.module.value(config, name)
+        return self._hook("value", config, name)
 
     def replicates(self, config: Any) -> range | None:
         """The replicates a run of ``config`` holds; None if it is the one its seed names."""
-        replicates = getattr(self.module, "replicates", None)
-        return None if replicates is None else replicates(config)
+        return self._hook("replicates", config) if hasattr(self.module, "replicates") else None
 
     def outdated(self, config: Any, summary: Path) -> bool:
-        outdated = getattr(self.module, "outdated", None)
-        return outdated is not None and outdated(config, summary)
+        return hasattr(self.module, "outdated") and self._hook("outdated", config, summary)
 
     def read_config(self, path: str | os.PathLike) -> Any:
-        return self.module.read_config(path)
+        return self._hook("read_config", path)
 
     def table_schemas(self) -> dict[str, pyarrow.Schema]:
-        return self.module.table_schemas()
+        return self._hook("table_schemas")
 
     def simulate(self, config: Any) -> dict[str, pyarrow.Table]:
-        return self.module.simulate(config)
+        """The run's tables: a dict of exactly the scenario's :attr:`tables`, each a pyarrow Table
+        (HookError, one line, otherwise). An installed scenario's is called through
+        :func:`dronefleet.sweeps.simulate`, in a process of its own, by the commands and the API."""
+        import pyarrow as pa  # here, not at the top: the registry imports no pyarrow until a run
+
+        tables = self._hook("simulate", config)
+        if not isinstance(tables, dict):
+            raise self.problem("simulate", f"returned {type(tables).__name__}, not a dict of its tables "
+                                            f"({', '.join(self.tables)}) as pyarrow Tables")
+        if set(tables) != set(self.tables):
+            raise self.problem("simulate", f"returned the tables {', '.join(map(_show, tables)) or 'none'}; "
+                                            f"its TABLES are {', '.join(self.tables)}")
+        for name, table in tables.items():
+            if not isinstance(table, pa.Table):
+                raise self.problem("simulate", f"returned its table {name!r} as {type(table).__name__}, "
+                                                "not a pyarrow Table")
+        return tables
 
     def format_summary(self, tables: Mapping[str, pyarrow.Table]) -> str:
-        return self.module.format_summary(tables)
+        return self._text("format_summary", tables)
 
     def describe(self, config: Any) -> str:
-        return self.module.describe(config)
+        return self._text("describe", config)
 
     def label(self, config: Any) -> str:
-        return self.module.label(config)
+        return self._text("label", config)
 
     @property
     def format_bounds(self) -> Callable | None:
         return getattr(self.module, "format_bounds", None)
 
-    def _replay_data(self) -> Callable[..., dict[str, Any]]:
-        replay_data = getattr(self.module, "replay_data", None)
-        if replay_data is None:
+    def _check_has_replay(self) -> None:
+        if not hasattr(self.module, "replay_data"):
             having = [s.name for s in loading().values() if hasattr(s.module, "replay_data")]
             raise ConfigError(f"scenario {self.name!r} has no replay page; scenarios with one: {', '.join(having)}")
-        return replay_data
 
     def replay_data(self, run_dir: Path, trial: int | None = None) -> dict[str, Any]:
         """The replay page's data of the run folder ``run_dir`` (of its trial ``trial``; None: its
-        first); ConfigError if the scenario has no replay or its runs no trials to choose."""
-        replay_data = self._replay_data()
-        if trial is None:
-            return replay_data(run_dir)
-        self._check_has_trials(trial)
-        return replay_data(run_dir, trial)
+        first); ConfigError if the scenario has no replay or its runs no trials to choose, HookError
+        if the data is not a JSON-ready dict with ``title`` and ``duration_s``."""
+        self._check_has_replay()
+        if trial is not None:
+            self._check_has_trials(trial)
+        data = self._hook("replay_data", run_dir, *(() if trial is None else (trial,)))
+        if not isinstance(data, dict) or not isinstance(data.get("title"), str) or \
+                not isinstance(data.get("duration_s"), (int, float)) or isinstance(data["duration_s"], bool):
+            raise self.problem("replay_data", f"returned {type(data).__name__}, not a dict with a title (str) "
+                                               "and duration_s (a number of seconds)")
+        if not self.builtin:
+            try:
+                json.dumps(data)  # the page embeds it as JSON (NaN becomes null there)
+            except (TypeError, ValueError, RecursionError) as error:
+                raise self.problem("replay_data", f"returned data that is not JSON-ready: {error}") from None
+        return data
 
     def _check_has_trials(self, trial: int) -> None:
         if not hasattr(self.module, "replicates"):
@@ -156,15 +222,14 @@ class Scenario:
     def check_replayable(self, config: Any, trial: int | None = None) -> None:
         """ConfigError (one line) if the replay page of a run of ``config`` (of its trial
         ``trial``; None: its first) would be refused: asked before the run."""
-        self._replay_data()
+        self._check_has_replay()
         if trial is not None:
             from .records import check_trial  # not at the top: the registry imports no numpy until used
 
             self._check_has_trials(trial)
             check_trial(trial, self.replicates(config), "the run")
-        check = getattr(self.module, "check_replayable", None)
-        if check is not None:
-            check(config)
+        if hasattr(self.module, "check_replayable"):
+            self._hook("check_replayable", config)
 
     @property
     def replay_script(self) -> str:

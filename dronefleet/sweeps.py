@@ -501,6 +501,21 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
 # --------------------------------------------------------------------------- one run
 
 
+def simulate(scenario: Scenario, config: Any) -> dict[str, pyarrow.Table]:
+    """``scenario.simulate(config)`` for ``dronefleet run``, the API and a replay: a built-in's in
+    this process, an installed scenario's in a worker process of its own
+    (:func:`dronefleet.executors.contained`), so that one that ends its process (``os._exit``), is
+    killed or crashes is a HookError (one line), not the silent end of the caller."""
+    if scenario.builtin:
+        return scenario.simulate(config)
+    from . import executors
+
+    try:
+        return executors.contained(scenario.simulate, config)
+    except executors.WorkerDied as died:
+        raise scenario.problem("simulate", f"ended its process ({died.how}) before returning its tables") from None
+
+
 def execute(run: Run, out: Path) -> str | None:
     """Simulate ``run`` and write its tables into the dataset ``out``.
 
@@ -1289,7 +1304,7 @@ def run_command(args: argparse.Namespace) -> int:
     log.debug(f"  sweep file {sweep.path}")
     start = time.perf_counter()
     try:
-        with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # its first run runs here
+        with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # with --jobs 1 its runs run here
             ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
     except KeyboardInterrupt:
         log.warning(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")

@@ -262,9 +262,12 @@ except dronefleet.config.ConfigError as error:
 """
 
 
-def test_a_plugin_in_the_calling_script_is_refused_before_a_sweep_with_workers(tmp_path):
-    # The workers never run the script: "__main__" there is not it. Said before any run, in one line.
-    done = run_python("script", RULE_IN_SCRIPT, tmp_path)
+@pytest.mark.parametrize("rules", ['"least_confident", "__main__:fullest"', '"__main__:fullest"'],
+                         ids=["two-runs", "one-run"])
+def test_a_plugin_in_the_calling_script_is_refused_before_a_sweep_with_workers(tmp_path, rules):
+    # The workers never run the script: "__main__" there is not it; with jobs > 1 every run runs in a
+    # worker, a single one too (so that its death is one failed run). Said before any run, in one line.
+    done = run_python("script", RULE_IN_SCRIPT.replace('"least_confident", "__main__:fullest"', rules), tmp_path)
     assert done.returncode == 0, done.stderr
     message, = done.stdout.splitlines()
     assert message.startswith("rule='__main__:fullest' ") and "jobs=1" in message

@@ -71,6 +71,14 @@ def _children(pid):
         return []
 
 
+def _ended(pid):
+    """Whether the process ``pid`` has ended (a zombie that init has yet to reap has)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] in "ZX"
+    except FileNotFoundError:
+        return True
+
+
 def _start(args, cwd, path=None, group=False, script=None):
     """``python -m dronefleet ARGS`` (or ``python -c SCRIPT ARGS``; ``path`` first on its module path)
     with Ctrl-C handled as in a terminal (a process started in the background of a non-interactive
@@ -152,6 +160,34 @@ def test_a_plugin_rule_that_never_returns_is_named_and_left_behind(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+SPINNING_SWEEP = """
+[sweep]
+name = "spinning"
+seeds = [0, 1]
+[set]
+horizon_weeks = 1
+[grid]
+rule = ["spinning:spin"]
+"""
+
+
+def test_sigterm_ends_a_sweep_whose_winner_rule_never_returns(tmp_path):
+    # as `timeout` ends a command: SIGTERM to it alone, its worker (the rule's run) is stopped by it
+    (tmp_path / "spinning.py").write_text(NEVER_RETURNS)
+    (tmp_path / "spinning.toml").write_text(SPINNING_SWEEP)
+    results = tmp_path / "results"
+    process = _start(["sweep", "run", "spinning.toml", "--results", str(results), "--jobs", "2"], tmp_path,
+                     path=tmp_path, group=True)
+    _wait_until(process, lambda: any(_kernel_ticks(child) >= KERNEL_TICKS for child in _children(process.pid)))
+    workers = _children(process.pid)
+    assert any("interrupted" in line for line in _interrupted(process, signum=signal.SIGTERM))
+    deadline = time.monotonic() + 60  # a hang, not a measure
+    while not all(map(_ended, workers)):
+        assert time.monotonic() < deadline, "a worker outlives the sweep"
+        time.sleep(0.05)
+    assert not list(results.rglob("part-0.parquet")) and _leftovers(results) == []
+
+
 def test_ctrl_c_while_a_plugin_module_hangs_on_import_names_it(tmp_path):
     (tmp_path / "hanging.py").write_text(HANGS_ON_IMPORT)
     process = _start(["run", "--set", "rule=hanging:rule", "--out", str(tmp_path / "out")], tmp_path,
@@ -177,8 +213,8 @@ ticks = [60, 50000000]
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
 @pytest.mark.parametrize("group", [True, False], ids=["every-process", "parent-only"])
 def test_ctrl_c_of_a_sweep_keeps_the_runs_done_and_stops_its_workers(group, signum, tmp_path):
-    # The first run (60 ticks) runs in the command's process, the second (years of ticks) in a
-    # worker, which the terminal's Ctrl-C reaches too, but a `kill -INT` of the command does not.
+    # The first run (60 ticks) runs in a worker alone, the second (years of ticks) in a worker
+    # after it, which the terminal's Ctrl-C reaches too, but a `kill -INT` of the command does not.
     (tmp_path / "long.toml").write_text(SWEEP)
     results = tmp_path / "results"
     process = _start(["sweep", "run", "long.toml", "--results", str(results), "--jobs", "2"], tmp_path, group=True)

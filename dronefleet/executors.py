@@ -169,6 +169,7 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
         return
     from loky import ProcessPoolExecutor  # imported with a sweep of several processes only
     from loky.backend import get_context
+    from multiprocessing import resource_tracker
 
     context = get_context("loky")  # not "loky_init_main", which runs the main module as spawn does
 
@@ -189,7 +190,9 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
         item = items.popleft()
         # A worker starts in the submit: with SIGINT blocked, which it inherits, so that a
         # Ctrl-C while it starts up is no traceback of its own (as multiprocessing's resource
-        # tracker does); it is delivered here once unblocked.
+        # tracker does); it is delivered here once unblocked. The worker's start starts that
+        # tracker if it is not running, which unblocks both signals as it ends: started first.
+        resource_tracker.ensure_running()
         signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
         try:
             holding[pool.submit(_interruptible, function, item)] = pool, item

@@ -155,3 +155,19 @@ def test_check_refuses_a_replenishment_configuration_it_cannot_re_run_before_any
         return table.set_column(index, column, pa.array(values, table.schema.field(column).type))
     tamper(path, change)
     refused(["reproduce", "fig09", "--check", "--out", str(tmp_path)], capsys, str(path), fragment)
+
+
+@pytest.mark.parametrize("figure, table", [("items-fig04", "runs"), ("lunar-fig07", "timeseries")])
+def test_redraw_refuses_a_table_of_more_rows_than_a_study_writes_before_reading_it(figure, table, tmp_path, capsys):
+    # Read whole, 2-3 million rows exhausted 4 GiB of address space (a MemoryError traceback); the
+    # bound is the table's row count, in its footer.
+    from dronefleet.reproduce import MAX_TABLE_ROWS
+
+    copy_tables(figure, tmp_path)
+    path = tmp_path / figure / f"{table}.parquet"
+    tamper(path, lambda rows: pa.concat_tables([rows] * (MAX_TABLE_ROWS // rows.num_rows + 1))
+           .slice(0, MAX_TABLE_ROWS + 1))
+    before = sorted(tmp_path.rglob("*"))
+    refused(["reproduce", figure, "--redraw", "--out", str(tmp_path)], capsys, str(path),
+            f"holds {MAX_TABLE_ROWS + 1:,} rows")
+    assert sorted(tmp_path.rglob("*")) == before  # nothing drawn

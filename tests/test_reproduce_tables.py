@@ -171,3 +171,22 @@ def test_redraw_refuses_a_table_of_more_rows_than_a_study_writes_before_reading_
     refused(["reproduce", figure, "--redraw", "--out", str(tmp_path)], capsys, str(path),
             f"holds {MAX_TABLE_ROWS + 1:,} rows")
     assert sorted(tmp_path.rglob("*")) == before  # nothing drawn
+
+
+@pytest.mark.parametrize("command", ["--redraw", "--check"])
+@pytest.mark.parametrize("table, column, value, fragment", [
+    ("runs", "battery_wh", 0.0, "energy.battery_wh = 0.0 is out of range"),
+    ("runs", "battery_wh", 1e308, "energy.battery_wh = 1e+308 is out of range"),
+    ("timeseries", "v0", 50.0, "robots.v0 = 50.0 is out of range"),
+    ("runs", "layout", "MOON", "world.layout = 'MOON' is not allowed"),
+])
+def test_a_lunar_condition_outside_a_config_files_rules_is_refused_before_any_run(command, table, column, value,
+                                                                                  fragment, tmp_path, capsys,
+                                                                                  monkeypatch):
+    monkeypatch.setattr(importlib.import_module("dronefleet.lunar.simulate"), "simulate", no_run)
+    copy_tables("lunar-fig07", tmp_path)
+    path = tmp_path / "lunar-fig07" / f"{table}.parquet"
+    tamper(path, set_first(column, value))
+    before = sorted(tmp_path.rglob("*"))
+    refused(["reproduce", "lunar-fig07", command, "--out", str(tmp_path)], capsys, str(path), fragment)
+    assert sorted(tmp_path.rglob("*")) == before  # nothing drawn

@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import SweepError
-from ..contract import StudyContext
+from ..contract import StudyContext, check_configurations
 from . import experiments
 from .experiments import CURVE_METRICS, TRIP_METRICS
 
@@ -238,19 +238,22 @@ def tidy(study: StudyContext, figure: str) -> None:
         study.write_table(table, d / f"{name}.parquet")
 
 
+#: The most conditions (configurations) a figure's table may hold (lunar-control draws 6).
+MAX_CONDITIONS = 100
+
+
 def read_tables(study: StudyContext, figure: str, names) -> dict[str, pd.DataFrame]:
-    """The figure's tables ``names``, their columns checked (``study.read_table``), and every
-    layout of its ``runs`` one of the model's, so that a tampered table is one line naming the
-    file and the value before anything is drawn or run."""
-    from .params import LAYOUTS
+    """The figure's tables ``names``, their columns checked (``study.read_table``), and the
+    configuration values of each condition (layout, battery, ...) held to a config file's rules,
+    so that a tampered table is one line naming the file and the value before anything is drawn or run."""
+    from .keys import KEYS, checked
 
     tables = {name: study.read_table(figure, name) for name in names}
     for name, table in tables.items():
-        if "layout" in table.columns:
-            wrong = sorted(set(table["layout"]) - set(LAYOUTS))
-            if wrong:
-                raise SweepError(f"{study.root / figure / f'{name}.parquet'}: layout {wrong[0]!r} is not one of "
-                                 f"{', '.join(LAYOUTS)}")
+        keys = [column for column in _CONDITION if column in KEYS and column in table.columns]
+        if keys:
+            check_configurations(table, keys, study.root / figure / f"{name}.parquet", MAX_CONDITIONS, checked,
+                                 lambda values: ", ".join(f"{k}={v!r}" for k, v in values.items()))
     return tables
 
 

@@ -29,11 +29,13 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
 from ..config import SweepError
 from ..contract import StudyContext, check_configurations
 from . import experiments
 from .experiments import CURVE_METRICS, TRIP_METRICS
+from .simulate import table_schemas
 
 TITLE = ("beacon-guided foraging with recharging on the Moon (Angyal 2024), Figs 6-3 to 6-11 and the eps = 1 "
          "control (docs/guide/lunar.md)")
@@ -82,9 +84,19 @@ _CONDITION = {"experiment": "text", "condition": "text", "layout": "text", "layo
 _SNAPSHOT = {"run": "count", "label": "text", "t": "number", "robot": "count", "status": "text", "role": "text",
              "mode": "text", "x": "number", "y": "number", "heading": "number", "soc": "number", "load": "count",
              **{f"{name}_{key}": "number" for name in ("omega", "vx", "vy", "S") for key in "TNR"}}
-#: The columns of the figures' tables and their kinds (:data:`dronefleet.reproduce.KINDS`).
+
+
+def _kinds(schema: pa.Schema) -> dict[str, str]:
+    """Each column of the simulator's table ``schema`` by the kind of its type."""
+    return {field.name: "text" if pa.types.is_string(field.type) else "integer" if pa.types.is_integer(field.type)
+            else "number" for field in schema}
+
+
+#: The columns of the figures' tables and their kinds (:data:`dronefleet.reproduce.KINDS`): every
+#: column, so that each is checked (a runs table holds the simulator's whole summary).
 TABLE_COLUMNS = {
-    "runs": {**_CONDITION, "run": "count", "seed": "integer", "resources": "count", "selected": "flag"},
+    "runs": {**_kinds(table_schemas()["summary"]), **_CONDITION, "run": "count", "seed": "integer",
+             "resources": "count", "selected": "flag"},
     "timeseries": {**_CONDITION, "run": "count", "t": "number", **dict.fromkeys(CURVE_METRICS, "number")},
     "trips": {**_CONDITION, "run": "count", "origin": "text", "dest": "text", "t_entered": "number",
               **dict.fromkeys(TRIP_METRICS, "number")},

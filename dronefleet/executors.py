@@ -156,9 +156,13 @@ def _release(pool):
 
 def _submit(pool, function, item):
     """``function(item)`` on ``pool``'s worker (see :func:`_interruptible`): its future."""
+    from multiprocessing import resource_tracker
+
     # A worker starts in the submit: with SIGINT blocked, which it inherits, so that a Ctrl-C
     # while it starts up is no traceback of its own (as multiprocessing's resource tracker
-    # does); it is delivered here once unblocked.
+    # does); it is delivered here once unblocked. The worker's start starts that tracker if it
+    # is not running, which unblocks both signals as it ends: so it is started first.
+    resource_tracker.ensure_running()
     signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
     try:
         return pool.submit(_interruptible, function, item)

@@ -58,7 +58,7 @@ import pyarrow.parquet as pq
 from . import console, executors, scenarios
 from .config import ConfigError, shipped_config
 from .contract import FigureStudy
-from .datafiles import DataError, checked_column, parquet_schema, read_parquet
+from .datafiles import DataError, checked_column, parquet_rows, parquet_schema, read_parquet
 from .delivery import analysis
 from .outputs import probe_folders, writing
 from .replenishment import study as replenishment
@@ -289,6 +289,10 @@ TABLE_COLUMNS = {
 }
 
 
+#: The most rows a figure's table may hold, checked from its footer before it is read: ~10 times
+#: the largest a built-in study writes (108,000: lunar-fig11's time series), and still read whole
+#: in well under 4 GiB of address space.
+MAX_TABLE_ROWS = 1_000_000
 #: Columns whose values name at most one row of a table (a heatmap cell: its SoC, mass and distance).
 UNIQUE_KEYS = {"winner_soh": ("soc", "mass_kg", "distance_m")}
 
@@ -301,11 +305,15 @@ def _read_parquet(path, figure, name):
     again = f"run dronefleet reproduce {figure} without --check or --redraw to write it again"
     try:
         schema = parquet_schema(path)
+        rows = parquet_rows(path)
+        if rows == 0:  # every figure draws at least one run, and --check compares one
+            raise DataError(f"table {str(path)!r} holds no rows")
+        if rows > MAX_TABLE_ROWS:
+            raise DataError(f"table {str(path)!r} holds {rows:,} rows; a figure's table holds at most "
+                            f"{MAX_TABLE_ROWS:,}")
         kinds = {column: KINDS[columns[column]] if column in columns else (flat, _any, "", True)
                  for column in [*columns, *(c for c in schema.names if c not in columns)]}
         table = read_parquet(path, {column: kind[0] for column, kind in kinds.items()})
-        if table.num_rows == 0:  # every figure draws at least one run, and --check compares one
-            raise DataError(f"table {str(path)!r} holds no rows")
         frame = pd.DataFrame({column: checked_column(table, column, path, ok, allowed, nullable=nullable)
                               for column, (_, ok, allowed, nullable) in kinds.items()})[schema.names]
         keys = list(UNIQUE_KEYS.get(name, ()))

@@ -8,6 +8,7 @@ threads other than the main one have used CPU time, in a run made far too long t
 """
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -284,3 +285,37 @@ def test_ctrl_c_once_the_command_has_ended_does_not_undo_its_exit_code(tmp_path)
     done = subprocess.run([sys.executable, "-c", ENDED], capture_output=True, text=True, cwd=tmp_path, timeout=120)
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "absent.toml" in done.stderr, done.stderr
     assert done.stdout == "exiting\n"
+
+
+WORKER_STARTING = '''
+import os, signal, sys
+import loky.backend.fork_exec as spawning
+spawn = spawning.fork_exec
+
+def ctrl_c_as_the_worker_starts(*args, **kwargs):
+    spawning.fork_exec = spawn  # the first worker only
+    pid = spawn(*args, **kwargs)
+    # once the worker's interpreter handles SIGINT (it does before it imports its site and modules)
+    while not int(next(line for line in open(f"/proc/{pid}/status") if line.startswith("SigCgt:")).split()[1],
+                  16) & 1 << (signal.SIGINT - 1):
+        pass
+    os.killpg(0, signal.SIGINT)  # the terminal's Ctrl-C: to every process of the group
+    return pid
+
+spawning.fork_exec = ctrl_c_as_the_worker_starts
+from dronefleet.__main__ import main
+sys.exit(main())
+'''
+
+
+def test_ctrl_c_while_a_worker_of_reproduce_starts_is_no_message_of_the_worker(tmp_path):
+    # A worker starts with Ctrl-C blocked until its initializer ignores it; the worker's start
+    # also starts multiprocessing's resource tracker, which unblocked it again (the worker then
+    # died in its start-up, printing "Fatal Python error: init_import_site" or a traceback).
+    for figure in ("items-fig01", "items-fig02"):  # the first drawn here, the second in a worker
+        shutil.copytree(REPO / "results" / figure, tmp_path / "tables" / figure)
+    process = _start(["reproduce", "items-fig01", "items-fig02", "--redraw", "--jobs", "2", "--out",
+                      str(tmp_path / "tables")], tmp_path, group=True, script=WORKER_STARTING)
+    _, err = process.communicate(timeout=300)  # a hang, not a measure
+    assert process.returncode == 130, err
+    assert err.splitlines() == ["dronefleet: interrupted"], err

@@ -100,6 +100,19 @@ def test_combinations_the_text_does_not_define_are_refused(overrides, fragments)
     assert all(fragment in str(error.value) for fragment in fragments) and "\n" not in str(error.value)
 
 
+@pytest.mark.parametrize("overrides", [
+    # Foraging draws its locations each trial and builds their locations^2 travel table then.
+    ["trials=100000", "locations=1000", "steps=1", "n_robots=1"],
+    # Each trial seeds a stream per location of the grid (2,601 of them).
+    ["trials=100000", "mode=delivery", "grid_spacing=0.02", "steps=1", "n_robots=1"],
+])
+def test_a_run_of_many_short_trials_counts_each_trials_set_up_and_is_refused(tmp_path, capsys, overrides):
+    out = tmp_path / "out"
+    args = ["run", "items", *(arg for o in overrides for arg in ("--set", o)), "--out", str(out)]
+    refused(capsys, args, "the run would take", "set-up", "lower trials")
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("text, fragments", [
     ('scenario = "items"\ntruth = "poisson"\n', ("top level", "[generation]")),
     ('scenario = "items"\n[robots]\nsteps = 10\n', ("robots.steps", "belongs in [run]")),

@@ -20,6 +20,7 @@ from dronefleet.config import ConfigError
 from dronefleet.datafiles import DataError
 from dronefleet.lunar import LunarParams
 from dronefleet.lunar import scenario as lunar
+from dronefleet.lunar.keys import region_gap
 
 ROOT = Path(__file__).resolve().parents[1]
 LUNAR = ROOT / "configs" / "lunar.toml"
@@ -191,8 +192,8 @@ def test_the_limits_hold_the_documented_numbers():
                     "snapshot_rows": 50 * 50 * 16, "trip_rows": 50 * 50 * (4500 // 3.3 + 1)}
     assert lunar.RUN_LIMITS == {"robot_ticks": 2e9, "pair_ticks": 1e11, "records": 5e6, "snapshot_rows": 1e6,
                                 "trip_rows": 1e7}
-    assert math.isclose(lunar.region_gap(SCENARIO.load(None)), 6.3 - 3.0)  # R-T, the closest regions
-    assert math.isclose(lunar.region_gap(SCENARIO.load(None, ["layout_scale=1"])), 8.4 - 3.0)
+    assert math.isclose(region_gap(SCENARIO.load(None)), 6.3 - 3.0)  # R-T, the closest regions
+    assert math.isclose(region_gap(SCENARIO.load(None, ["layout_scale=1"])), 8.4 - 3.0)
     assert lunar.run_size(SCENARIO.load(None, ["frames=true"]))["snapshot_rows"] == 942_500
     text = LUNAR.read_text()
     assert "<= 2e9" in text and "<= 1e11" in text and "<= 5e6" in text and "<= 1e6" in text and "<= 1e7" in text

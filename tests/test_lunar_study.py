@@ -285,7 +285,8 @@ def test_a_tampered_layout_is_refused_in_one_line_naming_the_file(synthetic_resu
     table = pd.read_parquet(runs)
     table.loc[0, "layout"] = "MOON"
     table.to_parquet(runs, index=False)
-    with pytest.raises(SweepError, match=f"{runs}: layout 'MOON' is not one of OPEN"):
+    with pytest.raises(SweepError, match=f"{runs}: the configuration layout='MOON', .* world.layout = 'MOON' is not "
+                                         "allowed"):
         study.draw(context, "lunar-fig07")
 
 

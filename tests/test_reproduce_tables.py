@@ -85,6 +85,9 @@ REDRAWN = [
     ("fig09", "runs", set_first("n_chargers", -3), "n_chargers = -3"),
     ("fig09", "runs", set_first("n_chargers", 10**9), "n_chargers = 1000000000"),
     ("fig12", "bounds", set_first("transfer_loss", 2.0), "transfer_loss = 2.0"),
+    # a column of the simulator's summary the figure's statistics are derived from
+    ("lunar-fig07", "runs", as_text("trips"), "column 'trips' is string, not is_integer"),
+    ("lunar-control", "runs", as_text("deaths_per_session"), "column 'deaths_per_session' is string"),
 ]
 
 
@@ -155,3 +158,50 @@ def test_check_refuses_a_replenishment_configuration_it_cannot_re_run_before_any
         return table.set_column(index, column, pa.array(values, table.schema.field(column).type))
     tamper(path, change)
     refused(["reproduce", "fig09", "--check", "--out", str(tmp_path)], capsys, str(path), fragment)
+
+
+@pytest.mark.parametrize("figure, table", [("items-fig04", "runs"), ("lunar-fig07", "timeseries")])
+def test_redraw_refuses_a_table_of_more_rows_than_a_study_writes_before_reading_it(figure, table, tmp_path, capsys):
+    # Read whole, 2-3 million rows exhausted 4 GiB of address space (a MemoryError traceback); the
+    # bound is the table's row count, in its footer.
+    from dronefleet.reproduce import MAX_TABLE_ROWS
+
+    copy_tables(figure, tmp_path)
+    path = tmp_path / figure / f"{table}.parquet"
+    tamper(path, lambda rows: pa.concat_tables([rows] * (MAX_TABLE_ROWS // rows.num_rows + 1))
+           .slice(0, MAX_TABLE_ROWS + 1))
+    before = sorted(tmp_path.rglob("*"))
+    refused(["reproduce", figure, "--redraw", "--out", str(tmp_path)], capsys, str(path),
+            f"holds {MAX_TABLE_ROWS + 1:,} rows")
+    assert sorted(tmp_path.rglob("*")) == before  # nothing drawn
+
+
+@pytest.mark.parametrize("command", ["--redraw", "--check"])
+@pytest.mark.parametrize("table, column, value, fragment", [
+    ("runs", "battery_wh", 0.0, "energy.battery_wh = 0.0 is out of range"),
+    ("runs", "battery_wh", 1e308, "energy.battery_wh = 1e+308 is out of range"),
+    ("timeseries", "v0", 50.0, "robots.v0 = 50.0 is out of range"),
+    ("runs", "layout", "MOON", "world.layout = 'MOON' is not allowed"),
+])
+def test_a_lunar_condition_outside_a_config_files_rules_is_refused_before_any_run(command, table, column, value,
+                                                                                  fragment, tmp_path, capsys,
+                                                                                  monkeypatch):
+    monkeypatch.setattr(importlib.import_module("dronefleet.lunar.simulate"), "simulate", no_run)
+    copy_tables("lunar-fig07", tmp_path)
+    path = tmp_path / "lunar-fig07" / f"{table}.parquet"
+    tamper(path, set_first(column, value))
+    before = sorted(tmp_path.rglob("*"))
+    refused(["reproduce", "lunar-fig07", command, "--out", str(tmp_path)], capsys, str(path), fragment)
+    assert sorted(tmp_path.rglob("*")) == before  # nothing drawn
+
+
+def test_every_column_of_the_scenario_studies_tables_has_a_kind_to_check():
+    # A column a study does not declare is read as any flat type (text where a number belongs);
+    # the delivery figures' tables keep the sweeps' other columns, which --check compares value by value.
+    from dronefleet import reproduce
+
+    for path in sorted(RESULTS.glob("*/*.parquet")):
+        study = reproduce.owner(path.parent.name)
+        if study is not reproduce.DELIVERABLE:
+            undeclared = set(pq.read_schema(path).names) - set(study.TABLE_COLUMNS[path.stem])
+            assert not undeclared, (path, undeclared)

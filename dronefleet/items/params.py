@@ -99,11 +99,15 @@ KEYS: dict[str, Key] = {
                     "A15: FP items count when unloaded at home, or when picked up"),
 }
 
+#: What one trial costs besides its steps, in the units of ``steps`` (~5 ns each): seeding the
+#: streams of each robot and each location (~0.1-0.3 us apiece) and, in foraging, the travel
+#: table of the trial's drawn locations (locations^2 entries, ~1.3 ns each), measured rounded up.
+SETUP_PER_NODE, SETUP_PER_TRAVEL_ENTRY = 50, 0.25
 #: Limits on a run's work, checked before any work (see :func:`run_size`): ``steps`` counts
-#: trials x steps x (robots + locations) (generation and movement; ~5 ns each), ``scans``
-#: trials x steps x robots x locations (the most a run's decisions can read; ~2 ns each,
-#: reached only by robots deciding every step). The paper's largest cell (20 trials x 1000
-#: steps x (10 robots + 441 locations)) is 9e6 and 9e7.
+#: trials x ((steps + 1) x (robots + locations) + set-up) (generation, movement and each trial's
+#: set-up; ~5 ns each), ``scans`` trials x steps x robots x locations (the most a run's decisions
+#: can read; ~2 ns each, reached only by robots deciding every step). The paper's largest cell
+#: (20 trials x 1000 steps x (10 robots + 441 locations)) is 9e6 and 9e7.
 RUN_LIMITS = {"steps": 2e9, "scans": 2e11}
 
 
@@ -169,18 +173,28 @@ class Params:
         for limit, most in RUN_LIMITS.items():
             if size[limit] > most:
                 raise ParamsError(
-                    f"the run would take ~{size[limit]:.3g} {limit} (trials {self.trials} x steps {self.steps} x "
-                    + ("(robots + locations)" if limit == "steps" else "robots x locations")
+                    f"the run would take ~{size[limit]:.3g} {limit} (trials {self.trials} x "
+                    + (f"((steps {self.steps} + 1) x (robots + locations) + {trial_setup(self):,.0f} per trial's "
+                       "set-up)" if limit == "steps" else f"steps {self.steps} x robots x locations")
                     + f", {self.n_robots} robots, {self.n_locations} locations); at most {most:g}: lower trials, "
                     "steps, robots or locations", ("trials", "steps"))
         return self
 
 
+def trial_setup(params: Params) -> float:
+    """One trial's set-up in the units of ``steps`` (see :data:`SETUP_PER_NODE`); an IDP grid's
+    travel table is the same for every trial, built once per run."""
+    m = params.n_locations
+    travel = SETUP_PER_TRAVEL_ENTRY * m * m if params.foraging else 0.0
+    return SETUP_PER_NODE * (params.n_robots + m) + travel
+
+
 def run_size(params: Params) -> dict[str, float]:
-    """The work of a run as :data:`RUN_LIMITS` counts it."""
+    """The work of a run as :data:`RUN_LIMITS` counts it, each trial's set-up included."""
     trial_steps = params.trials * (params.steps + 1)
     m = params.n_locations
-    return {"steps": trial_steps * (params.n_robots + m), "scans": trial_steps * params.n_robots * m}
+    return {"steps": trial_steps * (params.n_robots + m) + params.trials * trial_setup(params),
+            "scans": trial_steps * params.n_robots * m}
 
 
 def _allowed(key: Key) -> str:

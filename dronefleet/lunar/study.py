@@ -29,11 +29,13 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
 from ..config import SweepError
-from ..contract import StudyContext
+from ..contract import StudyContext, check_configurations
 from . import experiments
 from .experiments import CURVE_METRICS, TRIP_METRICS
+from .simulate import table_schemas
 
 TITLE = ("beacon-guided foraging with recharging on the Moon (Angyal 2024), Figs 6-3 to 6-11 and the eps = 1 "
          "control (docs/guide/lunar.md)")
@@ -82,9 +84,19 @@ _CONDITION = {"experiment": "text", "condition": "text", "layout": "text", "layo
 _SNAPSHOT = {"run": "count", "label": "text", "t": "number", "robot": "count", "status": "text", "role": "text",
              "mode": "text", "x": "number", "y": "number", "heading": "number", "soc": "number", "load": "count",
              **{f"{name}_{key}": "number" for name in ("omega", "vx", "vy", "S") for key in "TNR"}}
-#: The columns of the figures' tables and their kinds (:data:`dronefleet.reproduce.KINDS`).
+
+
+def _kinds(schema: pa.Schema) -> dict[str, str]:
+    """Each column of the simulator's table ``schema`` by the kind of its type."""
+    return {field.name: "text" if pa.types.is_string(field.type) else "integer" if pa.types.is_integer(field.type)
+            else "number" for field in schema}
+
+
+#: The columns of the figures' tables and their kinds (:data:`dronefleet.reproduce.KINDS`): every
+#: column, so that each is checked (a runs table holds the simulator's whole summary).
 TABLE_COLUMNS = {
-    "runs": {**_CONDITION, "run": "count", "seed": "integer", "resources": "count", "selected": "flag"},
+    "runs": {**_kinds(table_schemas()["summary"]), **_CONDITION, "run": "count", "seed": "integer",
+             "resources": "count", "selected": "flag"},
     "timeseries": {**_CONDITION, "run": "count", "t": "number", **dict.fromkeys(CURVE_METRICS, "number")},
     "trips": {**_CONDITION, "run": "count", "origin": "text", "dest": "text", "t_entered": "number",
               **dict.fromkeys(TRIP_METRICS, "number")},
@@ -238,19 +250,22 @@ def tidy(study: StudyContext, figure: str) -> None:
         study.write_table(table, d / f"{name}.parquet")
 
 
+#: The most conditions (configurations) a figure's table may hold (lunar-control draws 6).
+MAX_CONDITIONS = 100
+
+
 def read_tables(study: StudyContext, figure: str, names) -> dict[str, pd.DataFrame]:
-    """The figure's tables ``names``, their columns checked (``study.read_table``), and every
-    layout of its ``runs`` one of the model's, so that a tampered table is one line naming the
-    file and the value before anything is drawn or run."""
-    from .params import LAYOUTS
+    """The figure's tables ``names``, their columns checked (``study.read_table``), and the
+    configuration values of each condition (layout, battery, ...) held to a config file's rules,
+    so that a tampered table is one line naming the file and the value before anything is drawn or run."""
+    from .keys import KEYS, checked
 
     tables = {name: study.read_table(figure, name) for name in names}
     for name, table in tables.items():
-        if "layout" in table.columns:
-            wrong = sorted(set(table["layout"]) - set(LAYOUTS))
-            if wrong:
-                raise SweepError(f"{study.root / figure / f'{name}.parquet'}: layout {wrong[0]!r} is not one of "
-                                 f"{', '.join(LAYOUTS)}")
+        keys = [column for column in _CONDITION if column in KEYS and column in table.columns]
+        if keys:
+            check_configurations(table, keys, study.root / figure / f"{name}.parquet", MAX_CONDITIONS, checked,
+                                 lambda values: ", ".join(f"{k}={v!r}" for k, v in values.items()))
     return tables
 
 

@@ -119,6 +119,8 @@ N_TRIP = 11
 (SN_RUN, SN_LABEL, SN_K, SN_ROBOT, SN_STATUS, SN_ROLE, SN_MODE, SN_X, SN_Y, SN_HEADING, SN_SOC,
  SN_LOAD, SN_OMEGA, SN_VX, SN_VY, SN_S) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 18, 21)
 N_SNAP = 24
+#: The most snapshots one tick can take: the three milestones, periodic, frame and end.
+SNAPS_PER_TICK = 6
 # A run's tallies (``tally``, int64): units deposited, unloads, deaths, and the milestone labels
 # reached this tick (a bit per label).
 TL_RESOURCES, TL_UNLOADS, TL_DEATHS, TL_MILESTONES = range(4)
@@ -377,7 +379,8 @@ def region_change(i, k, old, new, role, last_left, voided, tick_left, role_left,
     """Trip bookkeeping (section 12) of robot i whose region went from ``old`` to ``new`` at tick k:
     leaving a region starts a trip (``acc[i]`` = length, energy, soft length reset) unless a beacon
     spell ``voided[i]`` it, entering a region Y other than the last one left appends a trip record
-    (and ends the voiding). Returns (trips, n_trips)."""
+    (and ends the voiding) to ``trips``, which has room for it (the kernel makes room for a trip per
+    robot before each tick: no allocation in its tick loop). Returns (trips, n_trips)."""
     if old != NO_REGION and not voided[i]:
         last_left[i] = old
         tick_left[i] = k
@@ -387,7 +390,6 @@ def region_change(i, k, old, new, role, last_left, voided, tick_left, role_left,
         acc[i, 2] = 0.0
     if new != NO_REGION:
         if last_left[i] != NO_REGION and last_left[i] != new:
-            trips = _room(trips, n_trips, 1)
             row = trips[n_trips]
             row[TR_RUN] = run_id
             row[TR_ORIGIN] = last_left[i]
@@ -432,8 +434,8 @@ def _room(rows, used, more):
 @njit(cache=True)
 def _snapshot(snaps, used, run, label, k, n, status, role, mode, x, y, theta, energy, e_cap, load,
               omega, bvx, bvy, bsoc):
-    """Append one network snapshot (a row per robot) to ``snaps``; returns (snaps, used)."""
-    snaps = _room(snaps, used, n)
+    """Append one network snapshot (a row per robot) to ``snaps``, which has room for it; returns
+    the rows used."""
     for i in range(n):
         row = snaps[used]
         row[SN_RUN] = run
@@ -455,7 +457,7 @@ def _snapshot(snaps, used, run, label, k, n, status, role, mode, x, y, theta, en
             row[SN_VY + q] = bvy[i, q] if beacon else 0.0
             row[SN_S + q] = bsoc[i, q] if beacon else 0.0
         used += 1
-    return snaps, used
+    return used
 
 
 @njit(cache=True)
@@ -490,7 +492,7 @@ def alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
 # run_runs allocates them once per call and calls the phases in order every tick.
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def spawn(opts, pars, g, spawned, status, x, y, energy, search):
     """Step 1 (A33): the lowest-id unspawned robot spawns (ALIVE, E = soc0 E_cap, a random first
     decision) when no robot disc lies within 2 r_body of the spawn point. Returns (spawned, new):
@@ -512,7 +514,7 @@ def spawn(opts, pars, g, spawned, status, x, y, energy, search):
     return spawned + 1, spawned
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
                           decided, immediate, heading, memory, sensed, inbox):
     """Step 2 (section 5): the snapshot of the end of tick k-1 (``sx``, ``sy``, distances ``d2`` of the
@@ -617,7 +619,7 @@ def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, 
     decided[:spawned] = False
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, mode, reg, load, loaded_now, s_c,
                              n_failed, role_k1, role_k2, energy, visited_r, countdown, immediate, search, heading,
                              motion, memory, inbox, sensed, trip, row_counts, t_first, tally):
@@ -688,7 +690,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
         row_counts[row - 1] += 1
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
                       countdown, search, s_c, visited_r, decided, heading, memory, sensed):
     """Step 4 (7.1, 7.3): the RECONNECT contact test (-> BACKTRACK, an immediate decision), the
@@ -743,7 +745,7 @@ def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt
         decided[i] = True
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading, motion,
               sensed, hits, close, n_near):
     """Step 5, first half (7.4): for each robot about to translate, theta <- theta_a and the 7 IR
@@ -817,7 +819,7 @@ def avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode
         mdy[i] = cy
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, immediate, search, rc_travel, bt_travel,
                 bt_budget, heading, motion, sensed, trip, close, n_near):
     """Step 5, second half (7.5): in ascending id, each robot about to translate steps v0 tau along
@@ -892,7 +894,7 @@ def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, imme
                 blocked[i] = 0
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion, sensed, trip,
                       tally):
     """Step 6 (section 8): each alive robot's energy by :func:`tick_energy` (solar input where its
@@ -913,12 +915,12 @@ def energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, lo
             tally[TL_DEATHS] += 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, soc_ref, visited_r, trip, trips,
                 n_trips, t_first, tally):
     """Step 7 (sections 10, 12): for each robot alive after step 6, SOC_ref inside region(s_c),
     visited_R, and the region it entered or left (``here`` against ``reg``): trip records, the
-    first entries into T and R. Returns (trips, n_trips): ``trips`` grows as :func:`region_change` says."""
+    first entries into T and R. Returns n_trips (``trips`` has room for a trip per robot)."""
     last_left, voided, tick_left, role_left, acc = trip
     e_cap = pars[P_ECAP]
     for i in range(spawned):
@@ -941,10 +943,10 @@ def bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, 
                     t_first[1] = k
                     tally[TL_MILESTONES] |= 1 << LABEL_FIRST_R
             reg[i] = newreg
-    return trips, n_trips
+    return n_trips
 
 
-@borrowing
+@njit(cache=True, inline='always')
 def beacon_windows(opts, pars, table, spawned, sup, status, role, mode, countdown, n_failed, rc_travel, heading, memory,
                    inbox, row_counts):
     """Step 8 (section 6, 7.3): each alive beacon counts its window down; at 0 (restarted at n_T) it
@@ -983,12 +985,13 @@ def beacon_windows(opts, pars, table, spawned, sup, status, role, mode, countdow
             row_counts[ROW_D - 1] += 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline='always')
 def records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_k2, mode, x, y, energy, load, heading,
-            memory, row_counts, f_hist, nb_hist, series, align, align_w, tally, snaps, n_snaps):
+            memory, row_counts, f_hist, nb_hist, series, align, align_w, counts, tally, snaps, n_snaps):
     """Step 9 (section 12): the roles at k-1 and k-2, F and n_B of tick k, the time-series record
     every n_T ticks (``series[run]``) and the snapshots due this tick (the milestones reached,
-    periodic, frames, the end). Returns (snaps, n_snaps)."""
+    periodic, frames, the end; ``snaps`` has room for them). ``counts`` (8,) int64: scratch.
+    Returns n_snaps."""
     theta = heading[1]
     omega, bvx, bvy, bsoc, _, _ = memory
     resources = tally[TL_RESOURCES]
@@ -1019,7 +1022,7 @@ def records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_
         rec[TS_NEST_RECHARGES] = row_counts[2]
         rec[TS_SESSIONS] = row_counts[3]
         rec[TS_RATE] = resources - (f_hist[k - rate_w] if k >= rate_w else 0)
-        counts = np.zeros(8, dtype=np.int64)
+        counts[:] = 0
         soc_sum = 0.0
         soc_b = 0.0
         soc_m = 0.0
@@ -1060,21 +1063,63 @@ def records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_
             rec[TS_ALIGN + q] = align[q]
     for label in (LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5):
         if milestones & (1 << label):
-            snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, label, k, n, status, role, mode, x, y,
+            n_snaps = _snapshot(snaps, n_snaps, run_id, label, k, n, status, role, mode, x, y,
                                        theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
     if k % snap_every == 0:
-        snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
+        n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
                                    y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
     if frames and k % n_t == 0:
-        snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_FRAME, k, n, status, role, mode, x,
+        n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_FRAME, k, n, status, role, mode, x,
                                    y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
     if k == n_ticks:
-        snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_END, k, n, status, role, mode, x,
+        n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_END, k, n, status, role, mode, x,
                                    y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
-    return snaps, n_snaps
+    return n_snaps
 
 
 # ------------------------------------------------------------------ the kernel
+
+
+@borrowing
+def run_ticks(opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, first, spawned, status, sup, role, mode,
+              role_k1, role_k2, x, y, energy, load, s_c, soc_ref, visited_r, n_failed, bt_budget, bt_travel, rc_travel,
+              countdown, immediate, search, decided, reg, loaded_now, here, heading, motion, memory, inbox, sensed,
+              trip, hits, close, n_near, counts, row_counts, t_first, tally, f_hist, nb_hist, series, align, align_w,
+              trips, n_trips, snaps, n_snaps):
+    """Ticks ``first``, ``first`` + 1, ... K of run ``run`` (section 11: a call of each phase per tick, in
+    order) over the arrays :func:`run_runs` allocated, until the end, Ctrl-C (``stop``) or a tick that
+    might not find room for its trips (a row per robot) or snapshots (SNAPS_PER_TICK per robot) in
+    ``trips`` and ``snaps``. Returns (next tick, robots spawned, n_trips, n_snaps); run_runs makes room and calls
+    again. Compiled without reference counts (it borrows every array and allocates nothing), with
+    every phase inlined: a tick costs what the single loop it was cost."""
+    n = opts[O_ROBOTS]
+    n_ticks = opts[O_TICKS]
+    for k in range(first, n_ticks + 1):
+        if stop[0] != 0 or n_trips + n > trips.shape[0] or n_snaps + SNAPS_PER_TICK * n > snaps.shape[0]:
+            return k, spawned, n_trips, n_snaps
+        tally[TL_MILESTONES] = 0
+        spawned, new = spawn(opts, pars, g, spawned, status, x, y, energy, search)
+        sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
+                              decided, immediate, heading, memory, sensed, inbox)
+        roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, mode, reg, load, loaded_now,
+                                 s_c, n_failed, role_k1, role_k2, energy, visited_r, countdown, immediate, search,
+                                 heading, motion, memory, inbox, sensed, trip, row_counts, t_first, tally)
+        heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
+                          countdown, search, s_c, visited_r, decided, heading, memory, sensed)
+        avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading,
+                  motion, sensed, hits, close, n_near)
+        translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, immediate, search, rc_travel,
+                    bt_travel, bt_budget, heading, motion, sensed, trip, close, n_near)
+        energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion,
+                          sensed, trip, tally)
+        n_trips = bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, soc_ref, visited_r, trip,
+                              trips, n_trips, t_first, tally)
+        beacon_windows(opts, pars, table, spawned, sup, status, role, mode, countdown, n_failed, rc_travel,
+                       heading, memory, inbox, row_counts)
+        n_snaps = records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_k2, mode, x, y, energy,
+                          load, heading, memory, row_counts, f_hist, nb_hist, series, align, align_w, counts, tally,
+                          snaps, n_snaps)
+    return n_ticks + 1, spawned, n_trips, n_snaps
 
 
 @njit(cache=True, nogil=True)
@@ -1208,6 +1253,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     align = np.empty(3)
     align_w = np.empty(3)
     tally = np.zeros(N_TALLY, dtype=np.int64)
+    counts = np.zeros(8, dtype=np.int64)      # scratch of the time-series records
     # the phases' groups of arrays (section 11): the plan and motion heading, the avoidance and
     # blocked state, the beacon memory and inbox, what step 2 sensed, the trip in progress
     heading = (theta_a, theta, pcx, pcy, mdx, mdy)
@@ -1311,31 +1357,16 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         t_first = np.full(3, -1, dtype=np.int64)      # first entry into T, R; first row 5 [tick]
         run_id = runs[run]
 
-        for k in range(1, n_ticks + 1):
-            if stop[0] != 0:
-                break
-            tally[TL_MILESTONES] = 0
-            spawned, new = spawn(opts, pars, g, spawned, status, x, y, energy, search)
-            sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
-                                  decided, immediate, heading, memory, sensed, inbox)
-            roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, mode, reg, load, loaded_now,
-                                     s_c, n_failed, role_k1, role_k2, energy, visited_r, countdown, immediate, search,
-                                     heading, motion, memory, inbox, sensed, trip, row_counts, t_first, tally)
-            heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
-                              countdown, search, s_c, visited_r, decided, heading, memory, sensed)
-            avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading,
-                      motion, sensed, hits, close, n_near)
-            translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, immediate, search, rc_travel,
-                        bt_travel, bt_budget, heading, motion, sensed, trip, close, n_near)
-            energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion,
-                              sensed, trip, tally)
-            trips, n_trips = bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, soc_ref,
-                                         visited_r, trip, trips, n_trips, t_first, tally)
-            beacon_windows(opts, pars, table, spawned, sup, status, role, mode, countdown, n_failed, rc_travel,
-                           heading, memory, inbox, row_counts)
-            snaps, n_snaps = records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_k2, mode, x,
-                                     y, energy, load, heading, memory, row_counts, f_hist, nb_hist, series, align,
-                                     align_w, tally, snaps, n_snaps)
+        k = 1
+        while k <= n_ticks and stop[0] == 0:
+            trips = _room(trips, n_trips, n)
+            snaps = _room(snaps, n_snaps, SNAPS_PER_TICK * n)
+            k, spawned, n_trips, n_snaps = run_ticks(
+                opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, k, spawned, status, sup, role, mode,
+                role_k1, role_k2, x, y, energy, load, s_c, soc_ref, visited_r, n_failed, bt_budget, bt_travel,
+                rc_travel, countdown, immediate, search, decided, reg, loaded_now, here, heading, motion, memory,
+                inbox, sensed, trip, hits, close, n_near, counts, row_counts, t_first, tally, f_hist, nb_hist, series,
+                align, align_w, trips, n_trips, snaps, n_snaps)
 
         if start.shape[0] > 0:
             for i in range(n):

@@ -3,9 +3,19 @@
 One call of :func:`run_runs` runs every run of one configuration; each run seeds one xoshiro
 stream per robot from the run's root seed and the robot's id (section 13: the same streams in
 every scenario), and steps ticks k = 1..K in the order of section 11. State is a structure of
-plain arrays indexed by robot id (spawn order). Roles are the states of the role supervisor
-(``dronefleet/data/lunar-roles.yaml``): a row of section 9 fires only through
+plain arrays indexed by robot id (spawn order), allocated once per call. Roles are the states of
+the role supervisor (``dronefleet/data/lunar-roles.yaml``): a row of section 9 fires only through
 :func:`dronefleet.supervisor.take` on its transition table.
+
+A tick is a call of each phase, the steps of section 11 in order, each a kernel of its own over
+those arrays (some passed in groups: ``heading``, ``motion``, ``memory``, ``inbox``, ``sensed``,
+``trip``; ``tally`` holds the run's counts): :func:`spawn` (1), :func:`sense_and_communicate` (2),
+:func:`roles_and_region_actions` (3), :func:`heading_decisions` (4), :func:`avoidance` and
+:func:`translation` (5), :func:`energy_and_deaths` (6), :func:`bookkeeping` (7),
+:func:`beacon_windows` (8), :func:`records` (9). :func:`run_ticks` loops over the ticks with the
+phases inlined and without reference counts (a tick allocates nothing); :func:`run_runs` allocates,
+resets each run, makes room for a tick's trips and snapshots before calling it, and summarises.
+Geometry (walls, obstacle, rays, regions) is in :mod:`dronefleet.lunar.geometry`.
 
 Only + - * / sqrt, floor and :mod:`dronefleet.fpmath` (sincos, atan2, exp, log) touch the
 trajectory, so a run is bit-identical on any CPU. The rules the tests pin are small functions

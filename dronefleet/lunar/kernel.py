@@ -3,9 +3,19 @@
 One call of :func:`run_runs` runs every run of one configuration; each run seeds one xoshiro
 stream per robot from the run's root seed and the robot's id (section 13: the same streams in
 every scenario), and steps ticks k = 1..K in the order of section 11. State is a structure of
-plain arrays indexed by robot id (spawn order). Roles are the states of the role supervisor
-(``dronefleet/data/lunar-roles.yaml``): a row of section 9 fires only through
+plain arrays indexed by robot id (spawn order), allocated once per call. Roles are the states of
+the role supervisor (``dronefleet/data/lunar-roles.yaml``): a row of section 9 fires only through
 :func:`dronefleet.supervisor.take` on its transition table.
+
+A tick is a call of each phase, the steps of section 11 in order, each a kernel of its own over
+those arrays (some passed in groups: ``heading``, ``motion``, ``memory``, ``inbox``, ``sensed``,
+``trip``; ``tally`` holds the run's counts): :func:`spawn` (1), :func:`sense_and_communicate` (2),
+:func:`roles_and_region_actions` (3), :func:`heading_decisions` (4), :func:`avoidance` and
+:func:`translation` (5), :func:`energy_and_deaths` (6), :func:`bookkeeping` (7),
+:func:`beacon_windows` (8), :func:`records` (9). :func:`run_ticks` loops over the ticks with the
+phases inlined and without reference counts (a tick allocates nothing); :func:`run_runs` allocates,
+resets each run, makes room for a tick's trips and snapshots before calling it, and summarises.
+Geometry (walls, obstacle, rays, regions) is in :mod:`dronefleet.lunar.geometry`.
 
 Only + - * / sqrt, floor and :mod:`dronefleet.fpmath` (sincos, atan2, exp, log) touch the
 trajectory, so a run is bit-identical on any CPU. The rules the tests pin are small functions
@@ -53,14 +63,17 @@ Details the spec leaves to the implementation, as read here:
 import numpy as np
 
 from ..fpmath import atan2, exp, log, sincos
-from ..jit import njit
+from ..jit import borrowing, njit
 from ..rng import seed_stream, uniform
 from ..supervisor import take
+from .geometry import G_CORNERS, G_H, G_KIND, G_SPAWN, G_W, KIND_HARD, KIND_NONE, KIND_SOFT, NO_REGION
+from .geometry import G_CX, G_CY  # noqa: F401 (the geometry columns the tests read, as before the split)
+from .geometry import (disc_hits_quad, heading_alignment, inside_quad, near_box, ray_disc, ray_segment, ray_walls,
+                       region_of, segment_blocked, segment_point_dist2)
 
 # Roles (= keys for mobile roles: key F_OUT <-> region T, F_IN <-> N, R <-> R), statuses, modes.
 F_OUT, F_IN, R, B = 0, 1, 2, 3
 REG_T, REG_N, REG_R = 0, 1, 2
-NO_REGION = -1
 UNSPAWNED, ALIVE, DEAD = 0, 1, 2
 NORMAL, CHARGING, RECONNECT, BACKTRACK = 0, 1, 2, 3
 # States of the role supervisor (lunar-roles.yaml) and the role each one is.
@@ -86,10 +99,6 @@ N_OPTS = 18
  P_LAMBDA, P_KAPPA, P_ECAP, P_SOC0, P_MOVE, P_COMP, P_COMM, P_SCAN, P_AVOID, P_EXPLOIT, P_SOLAR,
  P_RBODY, P_IR) = range(25)
 N_PARS = 25
-
-# Geometry array (layout.kernel_geometry).
-G_W, G_H, G_CX, G_CY, G_RAD, G_KIND, G_CORNERS, G_SPAWN = 0, 1, 2, 5, 8, 11, 12, 20
-KIND_NONE, KIND_HARD, KIND_SOFT = 0, 1, 2
 
 PI = 3.141592653589793
 TWO_PI = 6.283185307179586
@@ -120,6 +129,12 @@ N_TRIP = 11
 (SN_RUN, SN_LABEL, SN_K, SN_ROBOT, SN_STATUS, SN_ROLE, SN_MODE, SN_X, SN_Y, SN_HEADING, SN_SOC,
  SN_LOAD, SN_OMEGA, SN_VX, SN_VY, SN_S) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 18, 21)
 N_SNAP = 24
+#: The most snapshots one tick can take: the three milestones, periodic, frame and end.
+SNAPS_PER_TICK = 6
+# A run's tallies (``tally``, int64): units deposited, unloads, deaths, and the milestone labels
+# reached this tick (a bit per label).
+TL_RESOURCES, TL_UNLOADS, TL_DEATHS, TL_MILESTONES = range(4)
+N_TALLY = 4
 LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL_FRAME = range(6)
 # Columns of a robot's state in ``run_runs(..., start)`` (a hand-built start, read back at the end).
 (ST_STATUS, ST_SUP, ST_MODE, ST_X, ST_Y, ST_THETA_A, ST_THETA, ST_ENERGY, ST_LOAD, ST_S_C, ST_SOC_REF,
@@ -374,7 +389,8 @@ def region_change(i, k, old, new, role, last_left, voided, tick_left, role_left,
     """Trip bookkeeping (section 12) of robot i whose region went from ``old`` to ``new`` at tick k:
     leaving a region starts a trip (``acc[i]`` = length, energy, soft length reset) unless a beacon
     spell ``voided[i]`` it, entering a region Y other than the last one left appends a trip record
-    (and ends the voiding). Returns (trips, n_trips)."""
+    (and ends the voiding) to ``trips``, which has room for it (the kernel makes room for a trip per
+    robot before each tick: no allocation in its tick loop). Returns (trips, n_trips)."""
     if old != NO_REGION and not voided[i]:
         last_left[i] = old
         tick_left[i] = k
@@ -384,7 +400,6 @@ def region_change(i, k, old, new, role, last_left, voided, tick_left, role_left,
         acc[i, 2] = 0.0
     if new != NO_REGION:
         if last_left[i] != NO_REGION and last_left[i] != new:
-            trips = _room(trips, n_trips, 1)
             row = trips[n_trips]
             row[TR_RUN] = run_id
             row[TR_ORIGIN] = last_left[i]
@@ -413,165 +428,6 @@ def complete(i, key, s_c, n_failed, mode):
         mode[i] = NORMAL
 
 
-# ------------------------------------------------------------------ geometry
-
-
-@njit(cache=True, inline='always')
-def _cross(ax, ay, bx, by, cx, cy):
-    """z of (b - a) x (c - a): > 0 when c lies left of a -> b."""
-    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-
-
-@njit(cache=True)
-def inside_quad(px, py, g):
-    """The point lies strictly inside the counter-clockwise obstacle rectangle of geometry ``g``."""
-    c = G_CORNERS
-    for e in range(4):
-        f = (e + 1) % 4
-        if _cross(g[c + 2 * e], g[c + 2 * e + 1], g[c + 2 * f], g[c + 2 * f + 1], px, py) <= 0.0:
-            return False
-    return True
-
-
-@njit(cache=True)
-def segments_cross(ax, ay, bx, by, cx, cy, dx, dy):
-    """Segments a-b and c-d meet (touching counts)."""
-    d1 = _cross(cx, cy, dx, dy, ax, ay)
-    d2 = _cross(cx, cy, dx, dy, bx, by)
-    d3 = _cross(ax, ay, bx, by, cx, cy)
-    d4 = _cross(ax, ay, bx, by, dx, dy)
-    if ((d1 > 0.0 and d2 < 0.0) or (d1 < 0.0 and d2 > 0.0)) and ((d3 > 0.0 and d4 < 0.0) or (d3 < 0.0 and d4 > 0.0)):
-        return True
-    return (d1 == 0.0 or d2 == 0.0 or d3 == 0.0 or d4 == 0.0) and \
-        min(ax, bx) <= max(cx, dx) and min(cx, dx) <= max(ax, bx) and \
-        min(ay, by) <= max(cy, dy) and min(cy, dy) <= max(ay, by) and \
-        ((d1 == 0.0 and _on(cx, cy, dx, dy, ax, ay)) or (d2 == 0.0 and _on(cx, cy, dx, dy, bx, by)) or
-         (d3 == 0.0 and _on(ax, ay, bx, by, cx, cy)) or (d4 == 0.0 and _on(ax, ay, bx, by, dx, dy)))
-
-
-@njit(cache=True, inline='always')
-def _on(ax, ay, bx, by, px, py):
-    """p (collinear with a-b) lies within the segment's box."""
-    return min(ax, bx) <= px <= max(ax, bx) and min(ay, by) <= py <= max(ay, by)
-
-
-@njit(cache=True)
-def segment_blocked(ax, ay, bx, by, g):
-    """The segment a-b crosses the hard obstacle of ``g`` (line of sight, section 5)."""
-    c = G_CORNERS
-    for e in range(4):
-        f = (e + 1) % 4
-        if segments_cross(ax, ay, bx, by, g[c + 2 * e], g[c + 2 * e + 1], g[c + 2 * f], g[c + 2 * f + 1]):
-            return True
-    return inside_quad(ax, ay, g)
-
-
-@njit(cache=True)
-def segment_point_dist2(ax, ay, bx, by, px, py):
-    """Squared distance from p to the segment a-b."""
-    ux = bx - ax
-    uy = by - ay
-    ll = ux * ux + uy * uy
-    t = 0.0
-    if ll > 0.0:
-        t = ((px - ax) * ux + (py - ay) * uy) / ll
-        t = min(1.0, max(0.0, t))
-    dx = ax + t * ux - px
-    dy = ay + t * uy - py
-    return dx * dx + dy * dy
-
-
-@njit(cache=True)
-def disc_hits_quad(px, py, r, g):
-    """A disc of radius r at p overlaps the hard obstacle of ``g``."""
-    if inside_quad(px, py, g):
-        return True
-    c = G_CORNERS
-    r2 = r * r
-    for e in range(4):
-        f = (e + 1) % 4
-        if segment_point_dist2(g[c + 2 * e], g[c + 2 * e + 1], g[c + 2 * f], g[c + 2 * f + 1], px, py) < r2:
-            return True
-    return False
-
-
-@njit(cache=True)
-def ray_segment(px, py, dx, dy, ax, ay, bx, by):
-    """Distance t >= 0 along the ray p + t d (|d| = 1) to the segment a-b, np.inf if it misses."""
-    ex = bx - ax
-    ey = by - ay
-    den = dx * ey - dy * ex
-    if den == 0.0:
-        return np.inf
-    wx = ax - px
-    wy = ay - py
-    t = (wx * ey - wy * ex) / den
-    s = (wx * dy - wy * dx) / den
-    if t >= 0.0 and 0.0 <= s <= 1.0:
-        return t
-    return np.inf
-
-
-@njit(cache=True)
-def ray_disc(px, py, dx, dy, qx, qy, r):
-    """Distance t >= 0 along the ray p + t d (|d| = 1) to the disc of radius r at q, np.inf if it
-    misses (0 if p is inside it)."""
-    wx = qx - px
-    wy = qy - py
-    t = wx * dx + wy * dy
-    perp2 = wx * wx + wy * wy - t * t
-    r2 = r * r
-    if wx * wx + wy * wy <= r2:
-        return 0.0
-    if t < 0.0 or perp2 >= r2:
-        return np.inf
-    return t - np.sqrt(r2 - perp2)
-
-
-@njit(cache=True)
-def ray_walls(px, py, dx, dy, w, h):
-    """Distance along the ray p + t d to the field's walls."""
-    t = np.inf
-    if dx < 0.0:
-        t = min(t, -px / dx)
-    elif dx > 0.0:
-        t = min(t, (w - px) / dx)
-    if dy < 0.0:
-        t = min(t, -py / dy)
-    elif dy > 0.0:
-        t = min(t, (h - py) / dy)
-    return t
-
-
-@njit(cache=True)
-def region_of(px, py, g):
-    """Index of the region (T 0, N 1, R 2) whose disc holds p (centre distance < radius), or -1."""
-    for q in range(3):
-        dx = px - g[G_CX + q]
-        dy = py - g[G_CY + q]
-        if dx * dx + dy * dy < g[G_RAD + q] * g[G_RAD + q]:
-            return q
-    return NO_REGION
-
-
-@njit(cache=True)
-def near_box(px, py, reach, box):
-    """p is within ``reach`` of the box (xmin, ymin, xmax, ymax)."""
-    return box[0] - reach <= px <= box[2] + reach and box[1] - reach <= py <= box[3] + reach
-
-
-@njit(cache=True)
-def heading_alignment(px, py, dx, dy, g, key):
-    """cos of the angle between (dx, dy) and the direction from p to region ``key``; NaN if
-    either has length 0."""
-    ex = g[G_CX + key] - px
-    ey = g[G_CY + key] - py
-    n = np.sqrt((dx * dx + dy * dy) * (ex * ex + ey * ey))
-    if n == 0.0:
-        return np.nan
-    return (dx * ex + dy * ey) / n
-
-
 # ------------------------------------------------------------------ outputs
 
 
@@ -588,8 +444,8 @@ def _room(rows, used, more):
 @njit(cache=True)
 def _snapshot(snaps, used, run, label, k, n, status, role, mode, x, y, theta, energy, e_cap, load,
               omega, bvx, bvy, bsoc):
-    """Append one network snapshot (a row per robot) to ``snaps``; returns (snaps, used)."""
-    snaps = _room(snaps, used, n)
+    """Append one network snapshot (a row per robot) to ``snaps``, which has room for it; returns
+    the rows used."""
     for i in range(n):
         row = snaps[used]
         row[SN_RUN] = run
@@ -611,7 +467,7 @@ def _snapshot(snaps, used, run, label, k, n, status, role, mode, x, y, theta, en
             row[SN_VY + q] = bvy[i, q] if beacon else 0.0
             row[SN_S + q] = bsoc[i, q] if beacon else 0.0
         used += 1
-    return snaps, used
+    return used
 
 
 @njit(cache=True)
@@ -641,7 +497,639 @@ def alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
         weighted[q] = wsum / wtotal if wtotal > 0.0 else np.nan
 
 
+# ------------------------------------------------------------------ the phases of a tick (section 11)
+# Each phase is one step of section 11 over the plain arrays of run_runs (indexed by robot id);
+# run_runs allocates them once per call and calls the phases in order every tick.
+
+
+@njit(cache=True, inline='always')
+def spawn(opts, pars, g, spawned, status, x, y, energy, search):
+    """Step 1 (A33): the lowest-id unspawned robot spawns (ALIVE, E = soc0 E_cap, a random first
+    decision) when no robot disc lies within 2 r_body of the spawn point. Returns (spawned, new):
+    the robots that exist now and the one spawned this tick (-1: none)."""
+    n = opts[O_ROBOTS]
+    r_body = pars[P_RBODY]
+    touch2 = 4.0 * r_body * r_body
+    spawn_x, spawn_y = g[G_SPAWN], g[G_SPAWN + 1]
+    if spawned >= n:
+        return spawned, -1
+    for j in range(spawned):
+        dx = x[j] - spawn_x
+        dy = y[j] - spawn_y
+        if dx * dx + dy * dy < touch2:
+            return spawned, -1
+    status[spawned] = ALIVE
+    energy[spawned] = pars[P_SOC0] * pars[P_ECAP]
+    search[spawned] = True             # its first heading is random (A33)
+    return spawned + 1, spawned
+
+
+@njit(cache=True, inline='always')
+def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
+                          decided, immediate, heading, memory, sensed, inbox):
+    """Step 2 (section 5): the snapshot of the end of tick k-1 (``sx``, ``sy``, distances ``d2`` of the
+    mobile robots), links (``nb_list``: the beacons in range of each mobile robot, ``links``), S_hat,
+    "no R guidance", the nearest beacon, and the mobile broadcasts written into the inboxes of the
+    beacons in range. The robot spawned this tick (``new``) senses nothing, is not sensed, is silent."""
+    _, _, pcx, pcy, mdx, mdy = heading
+    omega, bvx, bvy, bsoc, binit, _ = memory
+    sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest = sensed
+    ikey, idelta, ivx, ivy, iu = inbox
+    comm = pars[P_COMM_R]
+    comm2 = comm * comm
+    r_body = pars[P_RBODY]
+    reward, lam, v0, e_cap = pars[P_REWARD], pars[P_LAMBDA], pars[P_V0], pars[P_ECAP]
+    hard = int(g[G_KIND]) == KIND_HARD
+    los_bodies = opts[O_LOS_BODIES] != 0
+    redecide = opts[O_REDECIDE]
+    bcast_update = opts[O_BCAST_UPDATE] != 0
+    bcast_motion = opts[O_BCAST_MOTION] != 0
+    for i in range(spawned):                # a loop: a slice copy may allocate (numba's overlap check)
+        sx[i] = x[i]
+        sy[i] = y[i]
+    for i in range(spawned):
+        if status[i] != ALIVE or role[i] == B:
+            continue                       # only mobile robots sense, link and move
+        xi = x[i]
+        yi = y[i]
+        for j in range(spawned):
+            dx = x[j] - xi
+            dy = y[j] - yi
+            d2[i, j] = dx * dx + dy * dy
+    n_beacons = 0
+    for i in range(spawned):
+        nb_cnt[i] = 0
+        mb_cnt[i] = 0
+        if status[i] == ALIVE and role[i] == B:
+            beacons[n_beacons] = i
+            n_beacons += 1
+    for i in range(spawned):
+        if status[i] != ALIVE or role[i] == B or i == new:
+            continue
+        for q in range(n_beacons):
+            b = beacons[q]
+            if d2[i, b] >= comm2:
+                continue
+            if hard and min(x[i], x[b]) <= box[2] and max(x[i], x[b]) >= box[0] and \
+                    min(y[i], y[b]) <= box[3] and max(y[i], y[b]) >= box[1] and \
+                    segment_blocked(x[i], y[i], x[b], y[b], g):
+                continue
+            if los_bodies:
+                occluded = False
+                for o in range(spawned):
+                    if o != i and o != b and o != new and status[o] != UNSPAWNED and \
+                            segment_point_dist2(x[i], y[i], x[b], y[b], x[o], y[o]) < r_body * r_body:
+                        occluded = True
+                        break
+                if occluded:
+                    continue
+            nb_list[i, nb_cnt[i]] = b
+            nb_cnt[i] += 1
+            mb_cnt[b] += 1
+    for i in range(spawned):
+        if status[i] != ALIVE:
+            continue
+        if role[i] == B:
+            links[i] = mb_cnt[i]
+            continue
+        links[i] = nb_cnt[i]
+        best_omega = 0.0
+        no_r = True
+        near = -1
+        for x_key in range(3):
+            s_hat[i, x_key] = 0.0
+        for q in range(nb_cnt[i]):
+            b = nb_list[i, q]
+            best_omega = max(best_omega, omega[b, s_c[i]])
+            for x_key in range(3):
+                if binit[b, x_key] and bsoc[b, x_key] > s_hat[i, x_key]:
+                    s_hat[i, x_key] = bsoc[b, x_key]
+            if bvx[b, R] * bvx[b, R] + bvy[b, R] * bvy[b, R] > NO_GUIDANCE2:
+                no_r = False
+            if near < 0 or d2[i, b] < d2[i, near]:
+                near = b
+        no_r_guidance[i] = no_r
+        if redecide == REDECIDE_BEACON_CHANGE and near != nearest[i]:
+            immediate[i] = True
+        nearest[i] = near
+        if nb_cnt[i] == 0 or (bcast_update and not decided[i]):
+            continue
+        # the broadcast (s_c, Delta, -v_m, u) heard by every beacon in range
+        gamma = reward if reg[i] == s_c[i] else 0.0
+        delta = gamma + lam * best_omega
+        mvx, mvy = broadcast_velocity(mode[i] == CHARGING, bcast_motion, v0, pcx[i], pcy[i], mdx[i], mdy[i])
+        used = max(0.0, soc_ref[i] - energy[i] / e_cap)
+        for q in range(nb_cnt[i]):
+            b = nb_list[i, q]
+            ikey[b, i] = s_c[i]
+            idelta[b, i] = delta
+            ivx[b, i] = mvx
+            ivy[b, i] = mvy
+            iu[b, i] = used
+    decided[:spawned] = False
+
+
+@njit(cache=True, inline='always')
+def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, mode, reg, load, loaded_now, s_c,
+                             n_failed, role_k1, role_k2, energy, visited_r, countdown, immediate, search, heading,
+                             motion, memory, inbox, sensed, trip, row_counts, t_first, tally):
+    """Step 3 (sections 9, 10): in ascending id, each alive mobile robot unloads in N, completes its
+    region, fires the first row of section 9 whose guard holds (through the role supervisor
+    ``table``; row 1 makes it a beacon), loads on rows 10 and 11 and turns on the rows of 7.2.
+    Counts the rows in ``row_counts``, the units and unloads in ``tally`` and the first row 5 in
+    ``t_first[2]``."""
+    theta_a, theta, pcx, pcy, _, _ = heading
+    blocked, avoiding, _, _, _ = motion
+    omega, bvx, bvy, bsoc, binit, weight = memory
+    ikey = inbox[0]
+    nb_cnt, s_hat, no_r_guidance = sensed[3], sensed[8], sensed[9]
+    last_left, voided = trip[0], trip[1]
+    n_t = opts[O_NT]
+    r_max = opts[O_RMAX]
+    completion_last = opts[O_COMPLETION_LAST] != 0
+    turn_any = opts[O_TURN_ANY] != 0
+    e_cap = pars[P_ECAP]
+    for i in range(spawned):
+        loaded_now[i] = False
+        if status[i] != ALIVE or role[i] == B:
+            continue
+        r0 = role[i]
+        rg = reg[i]
+        if rg == REG_N and load[i] > 0 and take(table, sup, i, EV_UNLOAD):
+            tally[TL_RESOURCES] += load[i]
+            tally[TL_UNLOADS] += 1
+            load[i] = 0
+        if completion_last:
+            if rg != NO_REGION:
+                complete(i, rg, s_c, n_failed, mode)
+        elif rg == r0:                     # F_OUT in T, F_IN in N, R in R
+            complete(i, r0, s_c, n_failed, mode)
+        row = choose_row(r0, mode[i], rg, nb_cnt[i], role_k1[i], role_k2[i], energy[i] / e_cap, s_hat[i],
+                         visited_r[i], energy[i] == e_cap, load[i] > 0, no_r_guidance[i])
+        if row == 0 or (row == 3 and r0 == R):
+            continue                       # row 3 in role R: already going to charge
+        if not take(table, sup, i, ROW_EVENT[row]):
+            continue                       # the supervisor forbids it: the row does not fire
+        state = sup[i, 0]
+        role[i] = ROLE_OF_STATE[state]     # the role IS the supervisor's state
+        if state == S_R_CHARGING:
+            mode[i] = CHARGING
+        elif mode[i] == CHARGING or row == 1:
+            mode[i] = NORMAL
+        if row == 1:
+            become_beacon(i, n_t, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
+            avoiding[i] = False
+            blocked[i] = 0
+            immediate[i] = False
+            search[i] = False
+        elif row == 5 and t_first[2] < 0:
+            t_first[2] = k
+            tally[TL_MILESTONES] |= 1 << LABEL_FIRST_ROW5
+        if row == 9:                       # A17: rows 9 and 11 complete N and T
+            complete(i, F_IN, s_c, n_failed, mode)
+        elif row == 11:
+            complete(i, F_OUT, s_c, n_failed, mode)
+        if (row == 10 or row == 11) and take(table, sup, i, EV_LOAD):
+            load[i] = r_max
+            loaded_now[i] = True
+        # 7.2 (A26): turn on the role changes inside a region (rows 3, 5-11); "any": row 2 too
+        if (row == 3 or row >= 5 or (row == 2 and turn_any)) and take(table, sup, i, EV_TURN_AROUND):
+            theta_a[i] = wrap(theta[i] + PI)
+            theta[i] = theta_a[i]
+            pcy[i], pcx[i] = sincos(theta_a[i])
+        row_counts[row - 1] += 1
+
+
+@njit(cache=True, inline='always')
+def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
+                      countdown, search, s_c, visited_r, decided, heading, memory, sensed):
+    """Step 4 (7.1, 7.3): the RECONNECT contact test (-> BACKTRACK, an immediate decision), the
+    countdown of every mobile robot (restarted at n_T when at 0), and the heading decision of each
+    NORMAL or BACKTRACK robot that is due or decides immediately: guidance by its key (with the
+    fallbacks of A18) or a random search, two draws of its stream either way."""
+    theta_a, theta, pcx, pcy, _, _ = heading
+    _, bvx, bvy, _, _, weight = memory
+    nb_cnt, nb_list = sensed[3], sensed[4]
+    n_t = opts[O_NT]
+    fallback_literal = opts[O_FALLBACK_LITERAL] != 0
+    comm = pars[P_COMM_R]
+    eps = pars[P_EPS]
+    for i in range(spawned):
+        if status[i] != ALIVE or role[i] == B:
+            continue
+        if mode[i] == RECONNECT and nb_cnt[i] > 0:
+            mode[i] = BACKTRACK
+            bt_budget[i] = n_failed[i] * 0.5 * comm
+            bt_travel[i] = 0.0
+            immediate[i] = True
+        due = countdown[i] <= 0
+        if due:
+            countdown[i] = n_t
+        countdown[i] -= 1
+        if not (due or immediate[i]):
+            continue
+        immediate[i] = False
+        if mode[i] == BACKTRACK:
+            gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, s_c[i])
+            if gx == 0.0 and gy == 0.0:
+                mode[i] = NORMAL
+        elif mode[i] != NORMAL:
+            search[i] = False              # charging since: no decision left to make random
+            continue
+        if search[i]:                      # a random search: no guidance, both draws taken
+            search[i] = False
+            gx, gy = 0.0, 0.0
+        elif mode[i] == NORMAL:
+            key = role[i]
+            gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, key)
+            if gx == 0.0 and gy == 0.0:
+                if key == F_IN:
+                    gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, R)
+                elif key == R and (visited_r[i] or fallback_literal):
+                    gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, F_IN)
+        u = uniform(rng, 0, i)
+        o = (2.0 * uniform(rng, 0, i) - 1.0) * PI
+        theta_a[i] = follow_or_search(gx, gy, theta[i], u, o, eps)[0]
+        theta[i] = theta_a[i]
+        pcy[i], pcx[i] = sincos(theta_a[i])
+        decided[i] = True
+
+
+@njit(cache=True, inline='always')
+def avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading, motion,
+              sensed, hits, close, n_near):
+    """Step 5, first half (7.4): for each robot about to translate, theta <- theta_a and the 7 IR
+    rays of length r_body + d_IR against the walls, the hard obstacle and the snapshot's bodies; a hit
+    turns this tick's motion heading by :func:`avoidance_offset` (and the plan with ``avoidance =
+    "turn"``). Sets the motion direction (``mdx``, ``mdy``) translation takes and each robot's
+    bodies within reach of a ray or a step (``close[i, :n_near[i]]``)."""
+    theta_a, theta, pcx, pcy, mdx, mdy = heading
+    _, avoiding, was_avoiding, _, _ = motion
+    sx, sy, d2 = sensed[0], sensed[1], sensed[2]
+    avoid_turn = opts[O_AVOID_TURN] != 0
+    redecide = opts[O_REDECIDE]
+    r_body = pars[P_RBODY]
+    ray_len = r_body + pars[P_IR]
+    margin = 2.0 * (pars[P_V0] * pars[P_TAU]) + 1e-9   # how far two robots can close in within a tick
+    ray_reach = ray_len + r_body + margin
+    ray_reach2 = ray_reach * ray_reach
+    field_w, field_h = g[G_W], g[G_H]
+    hard = int(g[G_KIND]) == KIND_HARD
+    for i in range(spawned):
+        was_avoiding[i] = avoiding[i]
+        avoiding[i] = False
+        if status[i] != ALIVE or role[i] == B or mode[i] == CHARGING:
+            continue
+        xi = x[i]
+        yi = y[i]
+        theta[i] = theta_a[i]
+        cx = pcx[i]
+        cy = pcy[i]
+        any_hit = False
+        near_wall = xi < ray_len or yi < ray_len or xi > field_w - ray_len or yi > field_h - ray_len
+        near_obstacle = hard and near_box(xi, yi, ray_len, box)
+        count = 0                          # bodies a ray or this tick's step can reach
+        for j in range(spawned):
+            if d2[i, j] < ray_reach2 and j != i and status[j] != UNSPAWNED:
+                close[i, count] = j
+                count += 1
+        n_near[i] = count
+        for r in range(N_RAYS if i != new else 0):
+            hits[r] = np.inf
+            rdx = cx * ray_c[r] - cy * ray_s[r]
+            rdy = cy * ray_c[r] + cx * ray_s[r]
+            best = np.inf
+            if near_wall:
+                best = min(best, ray_walls(xi, yi, rdx, rdy, field_w, field_h))
+            if near_obstacle:
+                c = G_CORNERS
+                for e in range(4):
+                    f = (e + 1) % 4
+                    best = min(best, ray_segment(xi, yi, rdx, rdy, g[c + 2 * e], g[c + 2 * e + 1],
+                                                 g[c + 2 * f], g[c + 2 * f + 1]))
+            for q in range(count):
+                j = close[i, q]
+                if j != new:               # the rays see the snapshot (section 5, A29)
+                    best = min(best, ray_disc(xi, yi, rdx, rdy, sx[j], sy[j], r_body))
+            if best <= ray_len:
+                hits[r] = best
+                any_hit = True
+        if any_hit:
+            active, offset = avoidance_offset(hits, ray_len)
+            avoiding[i] = active
+            theta[i] = wrap(theta_a[i] + offset)
+            cy, cx = sincos(theta[i])
+            if avoid_turn:
+                theta_a[i] = theta[i]
+                pcx[i] = cx
+                pcy[i] = cy
+        elif redecide == REDECIDE_AVOID_CLEAR and was_avoiding[i]:
+            immediate[i] = True
+        mdx[i] = cx
+        mdy[i] = cy
+
+
+@njit(cache=True, inline='always')
+def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, immediate, search, rc_travel, bt_travel,
+                bt_budget, heading, motion, sensed, trip, close, n_near):
+    """Step 5, second half (7.5): in ascending id, each robot about to translate steps v0 tau along
+    (``mdx``, ``mdy``) unless the disc there leaves the field, overlaps the hard obstacle or a
+    body at its position already updated this tick (A29); ``blocked_limit`` blocked ticks in a row
+    give a new random plan. Accumulates the trip's length (soft part, with kappa) and the
+    RECONNECT and BACKTRACK distances (their ends: NORMAL, an immediate decision)."""
+    theta_a, theta, pcx, pcy, mdx, mdy = heading
+    blocked, _, _, moved, kappa = motion
+    d2 = sensed[2]
+    acc = trip[4]
+    blocked_limit = opts[O_BLOCKED]
+    r_body = pars[P_RBODY]
+    step = pars[P_V0] * pars[P_TAU]
+    d_rc = 2.0 * pars[P_COMM_R]
+    margin = 2.0 * step + 1e-9
+    touch2 = 4.0 * r_body * r_body
+    touch_reach = 2.0 * r_body + margin
+    touch_reach2 = touch_reach * touch_reach
+    field_w, field_h = g[G_W], g[G_H]
+    kind = int(g[G_KIND])
+    hard = kind == KIND_HARD
+    soft = kind == KIND_SOFT
+    kappa_soft = pars[P_KAPPA]
+    for i in range(spawned):
+        moved[i] = False
+        if status[i] != ALIVE or role[i] == B or mode[i] == CHARGING:
+            continue
+        xi = x[i]
+        yi = y[i]
+        nx = xi + step * mdx[i]
+        ny = yi + step * mdy[i]
+        ok = r_body <= nx <= field_w - r_body and r_body <= ny <= field_h - r_body
+        if ok and hard and near_box(nx, ny, r_body, box):
+            ok = not disc_hits_quad(nx, ny, r_body, g)
+        if ok:
+            for q in range(n_near[i]):
+                j = close[i, q]
+                if d2[i, j] < touch_reach2:
+                    dx = nx - x[j]
+                    dy = ny - y[j]
+                    if dx * dx + dy * dy < touch2:
+                        ok = False
+                        break
+        if ok:
+            kappa[i] = 1.0
+            if soft and inside_quad(xi, yi, g):
+                kappa[i] = kappa_soft
+                acc[i, 2] += step
+            x[i] = nx
+            y[i] = ny
+            moved[i] = True
+            blocked[i] = 0
+            acc[i, 0] += step
+            if mode[i] == RECONNECT:
+                rc_travel[i] += step
+                if rc_travel[i] >= d_rc:
+                    mode[i] = NORMAL
+                    immediate[i] = True
+                    search[i] = True
+            elif mode[i] == BACKTRACK:
+                bt_travel[i] += step
+                if bt_travel[i] >= bt_budget[i]:
+                    mode[i] = NORMAL
+                    immediate[i] = True
+        else:
+            blocked[i] += 1
+            if blocked[i] >= blocked_limit:
+                theta_a[i] = wrap(theta[i] + (2.0 * uniform(rng, 0, i) - 1.0) * PI)
+                theta[i] = theta_a[i]
+                pcy[i], pcx[i] = sincos(theta_a[i])
+                blocked[i] = 0
+
+
+@njit(cache=True, inline='always')
+def energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion, sensed, trip,
+                      tally):
+    """Step 6 (section 8): each alive robot's energy by :func:`tick_energy` (solar input where its
+    centre is in R after the move, ``here``: its region now), the gross energy added to its trip,
+    and death at E = 0 (row X), counted in ``tally``."""
+    _, avoiding, _, moved, kappa = motion
+    links = sensed[7]
+    acc = trip[4]
+    for i in range(spawned):
+        if status[i] != ALIVE:
+            continue
+        here[i] = region_of(x[i], y[i], g)
+        energy[i], used = tick_energy(energy[i], pars, here[i] == REG_R, role[i] != B, links[i], moved[i], kappa[i],
+                                      avoiding[i], loaded_now[i])
+        acc[i, 1] += used
+        if energy[i] == 0.0 and take(table, sup, i, EV_DEPLETED):
+            status[i] = DEAD
+            tally[TL_DEATHS] += 1
+
+
+@njit(cache=True, inline='always')
+def bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, soc_ref, visited_r, trip, trips,
+                n_trips, t_first, tally):
+    """Step 7 (sections 10, 12): for each robot alive after step 6, SOC_ref inside region(s_c),
+    visited_R, and the region it entered or left (``here`` against ``reg``): trip records, the
+    first entries into T and R. Returns n_trips (``trips`` has room for a trip per robot)."""
+    last_left, voided, tick_left, role_left, acc = trip
+    e_cap = pars[P_ECAP]
+    for i in range(spawned):
+        if status[i] != ALIVE:
+            continue
+        newreg = here[i]
+        if newreg == s_c[i]:
+            soc_ref[i] = energy[i] / e_cap
+        if newreg == REG_R:
+            visited_r[i] = True
+        old = reg[i]
+        if old != newreg:
+            trips, n_trips = region_change(i, k, old, newreg, role[i], last_left, voided, tick_left, role_left,
+                                           acc, trips, n_trips, run_id)
+            if newreg != NO_REGION:
+                if newreg == REG_T and t_first[0] < 0:
+                    t_first[0] = k
+                    tally[TL_MILESTONES] |= 1 << LABEL_FIRST_T
+                elif newreg == REG_R and t_first[1] < 0:
+                    t_first[1] = k
+                    tally[TL_MILESTONES] |= 1 << LABEL_FIRST_R
+            reg[i] = newreg
+    return n_trips
+
+
+@njit(cache=True, inline='always')
+def beacon_windows(opts, pars, table, spawned, sup, status, role, mode, countdown, n_failed, rc_travel, heading, memory,
+                   inbox, row_counts):
+    """Step 8 (section 6, 7.3): each alive beacon counts its window down; at 0 (restarted at n_T) it
+    updates its memory from its inbox (:func:`beacon_update`), empties the inbox, recomputes its
+    weights and, when it decays, reverts (row D): role s_prev, RECONNECT, n_failed + 1, memory
+    cleared, the 7.3 turn."""
+    theta_a, theta, pcx, pcy, _, _ = heading
+    omega, bvx, bvy, bsoc, binit, weight = memory
+    ikey, idelta, ivx, ivy, iu = inbox
+    n_t = opts[O_NT]
+    wform = opts[O_WFORM]
+    rho_w, rho_v, rho_p = pars[P_RHO_W], pars[P_RHO_V], pars[P_RHO_P]
+    rho_f, rho_c = pars[P_RHO_F], pars[P_RHO_C]
+    for i in range(spawned):
+        if status[i] != ALIVE or role[i] != B:
+            continue
+        countdown[i] -= 1
+        if countdown[i] > 0:
+            continue
+        countdown[i] = n_t
+        decays = beacon_update(omega[i], bvx[i], bvy[i], bsoc[i], binit[i], ikey[i], idelta[i],
+                               ivx[i], ivy[i], iu[i], rho_w, rho_v, rho_p, pars[P_PHI], pars[P_ETA_W])
+        ikey[i, :] = -1
+        for q in range(3):
+            weight[i, q] = beacon_weight(omega[i, q], bsoc[i, q], binit[i, q], rho_f, rho_c, wform)
+        if decays and take(table, sup, i, EV_REVERT):
+            role[i] = ROLE_OF_STATE[sup[i, 0]]     # s_prev, remembered by the beacon state
+            mode[i] = RECONNECT
+            n_failed[i] += 1
+            rc_travel[i] = 0.0
+            clear_memory(i, omega, bvx, bvy, bsoc, binit, weight)
+            if take(table, sup, i, EV_TURN_AROUND):
+                theta_a[i] = wrap(theta[i] + PI)
+                theta[i] = theta_a[i]
+                pcy[i], pcx[i] = sincos(theta_a[i])
+            row_counts[ROW_D - 1] += 1
+
+
+@njit(cache=True, inline='always')
+def records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_k2, mode, x, y, energy, load, heading,
+            memory, row_counts, f_hist, nb_hist, series, align, align_w, counts, tally, snaps, n_snaps):
+    """Step 9 (section 12): the roles at k-1 and k-2, F and n_B of tick k, the time-series record
+    every n_T ticks (``series[run]``) and the snapshots due this tick (the milestones reached,
+    periodic, frames, the end; ``snaps`` has room for them). ``counts`` (8,) int64: scratch.
+    Returns n_snaps."""
+    theta = heading[1]
+    omega, bvx, bvy, bsoc, _, _ = memory
+    resources = tally[TL_RESOURCES]
+    milestones = tally[TL_MILESTONES]
+    n = opts[O_ROBOTS]
+    n_ticks = opts[O_TICKS]
+    n_t = opts[O_NT]
+    rate_w = opts[O_RATE_W]
+    snap_every = opts[O_SNAP_EVERY]
+    frames = opts[O_FRAMES] != 0
+    e_cap = pars[P_ECAP]
+    soc0 = pars[P_SOC0]
+    n_rec = n_ticks // n_t
+    n_b = 0
+    for i in range(spawned):
+        role_k2[i] = role_k1[i]
+        role_k1[i] = role[i]
+        if status[i] == ALIVE and role[i] == B:
+            n_b += 1
+    f_hist[k] = resources
+    nb_hist[k] = n_b
+    if k % n_t == 0 and k // n_t <= n_rec:
+        rec = series[run, k // n_t - 1]
+        rec[TS_K] = k
+        rec[TS_RESOURCES] = resources
+        rec[TS_TRIPS] = tally[TL_UNLOADS]
+        rec[TS_INTERRUPTIONS] = row_counts[1]
+        rec[TS_NEST_RECHARGES] = row_counts[2]
+        rec[TS_SESSIONS] = row_counts[3]
+        rec[TS_RATE] = resources - (f_hist[k - rate_w] if k >= rate_w else 0)
+        counts[:] = 0
+        soc_sum = 0.0
+        soc_b = 0.0
+        soc_m = 0.0
+        soc_min = np.inf
+        units_b = 0
+        for i in range(n):
+            soc = energy[i] / e_cap
+            if status[i] == UNSPAWNED:
+                counts[3] += 1
+                soc_sum += soc0
+                continue
+            soc_sum += soc
+            if status[i] == DEAD:
+                counts[2] += 1
+            elif role[i] == B:
+                counts[1] += 1
+                soc_b += soc
+                soc_min = min(soc_min, soc)
+                units_b += load[i]
+            else:
+                counts[0] += 1
+                counts[4 + role[i]] += 1
+                soc_m += soc
+        rec[TS_MOBILE] = counts[0]
+        rec[TS_BEACONS] = counts[1]
+        rec[TS_DEAD] = counts[2]
+        rec[TS_UNSPAWNED] = counts[3]
+        rec[TS_F_OUT] = counts[4 + F_OUT]
+        rec[TS_F_IN] = counts[4 + F_IN]
+        rec[TS_R] = counts[4 + R]
+        rec[TS_SOC_SUM] = soc_sum
+        rec[TS_SOC_BEACONS] = soc_b
+        rec[TS_SOC_MOBILE] = soc_m
+        rec[TS_SOC_MIN_BEACON] = soc_min if counts[1] > 0 else np.nan
+        rec[TS_UNITS_BEACONS] = units_b
+        alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
+        for q in range(3):
+            rec[TS_ALIGN + q] = align[q]
+    for label in (LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5):
+        if milestones & (1 << label):
+            n_snaps = _snapshot(snaps, n_snaps, run_id, label, k, n, status, role, mode, x, y,
+                                       theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+    if k % snap_every == 0:
+        n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
+                                   y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+    if frames and k % n_t == 0:
+        n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_FRAME, k, n, status, role, mode, x,
+                                   y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+    if k == n_ticks:
+        n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_END, k, n, status, role, mode, x,
+                                   y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+    return n_snaps
+
+
 # ------------------------------------------------------------------ the kernel
+
+
+@borrowing
+def run_ticks(opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, first, spawned, status, sup, role, mode,
+              role_k1, role_k2, x, y, energy, load, s_c, soc_ref, visited_r, n_failed, bt_budget, bt_travel, rc_travel,
+              countdown, immediate, search, decided, reg, loaded_now, here, heading, motion, memory, inbox, sensed,
+              trip, hits, close, n_near, counts, row_counts, t_first, tally, f_hist, nb_hist, series, align, align_w,
+              trips, n_trips, snaps, n_snaps):
+    """Ticks ``first``, ``first`` + 1, ... K of run ``run`` (section 11: a call of each phase per tick, in
+    order) over the arrays :func:`run_runs` allocated, until the end, Ctrl-C (``stop``) or a tick that
+    might not find room for its trips (a row per robot) or snapshots (SNAPS_PER_TICK per robot) in
+    ``trips`` and ``snaps``. Returns (next tick, robots spawned, n_trips, n_snaps); run_runs makes room and calls
+    again. Compiled without reference counts (it borrows every array and allocates nothing), with
+    every phase inlined: a tick costs what the single loop it was cost."""
+    n = opts[O_ROBOTS]
+    n_ticks = opts[O_TICKS]
+    for k in range(first, n_ticks + 1):
+        if stop[0] != 0 or n_trips + n > trips.shape[0] or n_snaps + SNAPS_PER_TICK * n > snaps.shape[0]:
+            return k, spawned, n_trips, n_snaps
+        tally[TL_MILESTONES] = 0
+        spawned, new = spawn(opts, pars, g, spawned, status, x, y, energy, search)
+        sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
+                              decided, immediate, heading, memory, sensed, inbox)
+        roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, mode, reg, load, loaded_now,
+                                 s_c, n_failed, role_k1, role_k2, energy, visited_r, countdown, immediate, search,
+                                 heading, motion, memory, inbox, sensed, trip, row_counts, t_first, tally)
+        heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
+                          countdown, search, s_c, visited_r, decided, heading, memory, sensed)
+        avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading,
+                  motion, sensed, hits, close, n_near)
+        translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, immediate, search, rc_travel,
+                    bt_travel, bt_budget, heading, motion, sensed, trip, close, n_near)
+        energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion,
+                          sensed, trip, tally)
+        n_trips = bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, soc_ref, visited_r, trip,
+                              trips, n_trips, t_first, tally)
+        beacon_windows(opts, pars, table, spawned, sup, status, role, mode, countdown, n_failed, rc_travel,
+                       heading, memory, inbox, row_counts)
+        n_snaps = records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_k2, mode, x, y, energy,
+                          load, heading, memory, row_counts, f_hist, nb_hist, series, align, align_w, counts, tally,
+                          snaps, n_snaps)
+    return n_ticks + 1, spawned, n_trips, n_snaps
 
 
 @njit(cache=True, nogil=True)
@@ -675,45 +1163,13 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     n = opts[O_ROBOTS]
     n_ticks = opts[O_TICKS]
     n_t = opts[O_NT]
-    r_max = opts[O_RMAX]
-    blocked_limit = opts[O_BLOCKED]
-    rate_w = opts[O_RATE_W]
-    snap_every = opts[O_SNAP_EVERY]
-    frames = opts[O_FRAMES] != 0
-    avoid_turn = opts[O_AVOID_TURN] != 0
-    bcast_motion = opts[O_BCAST_MOTION] != 0
-    bcast_update = opts[O_BCAST_UPDATE] != 0
     wform = opts[O_WFORM]
-    fallback_literal = opts[O_FALLBACK_LITERAL] != 0
-    turn_any = opts[O_TURN_ANY] != 0
-    los_bodies = opts[O_LOS_BODIES] != 0
-    redecide = opts[O_REDECIDE]
-    completion_last = opts[O_COMPLETION_LAST] != 0
     init_state = opts[O_INIT_STATE]
-
     tau = pars[P_TAU]
-    rho_w, rho_v, rho_p = pars[P_RHO_W], pars[P_RHO_V], pars[P_RHO_P]
     rho_f, rho_c = pars[P_RHO_F], pars[P_RHO_C]
-    comm = pars[P_COMM_R]
-    comm2 = comm * comm
-    eta_w, phi_soc, v0, eps = pars[P_ETA_W], pars[P_PHI], pars[P_V0], pars[P_EPS]
-    reward, lam, kappa_soft = pars[P_REWARD], pars[P_LAMBDA], pars[P_KAPPA]
     e_cap = pars[P_ECAP]
     soc0 = pars[P_SOC0]
-    r_body = pars[P_RBODY]
-    ray_len = r_body + pars[P_IR]
-    step = v0 * tau
-    d_rc = 2.0 * comm
-    margin = 2.0 * step + 1e-9          # how far two robots can close in on each other within a tick
-    ray_reach = ray_len + r_body + margin
-    ray_reach2 = ray_reach * ray_reach
-    touch2 = 4.0 * r_body * r_body
-    touch_reach = 2.0 * r_body + margin
-    touch_reach2 = touch_reach * touch_reach
-    field_w, field_h = g[G_W], g[G_H]
     kind = int(g[G_KIND])
-    hard = kind == KIND_HARD
-    soft = kind == KIND_SOFT
     box = np.empty(4)
     if kind != KIND_NONE:
         box[0] = min(g[G_CORNERS + 0], g[G_CORNERS + 2], g[G_CORNERS + 4], g[G_CORNERS + 6])
@@ -798,12 +1254,24 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     s_hat = np.zeros((n, 3))
     no_r_guidance = np.zeros(n, dtype=np.bool_)
     hits = np.empty(N_RAYS)
-    close = np.zeros(n, dtype=np.int64)  # bodies near the moving robot
+    close = np.zeros((n, n), dtype=np.int64)  # bodies near each moving robot (avoidance -> translation)
+    n_near = np.zeros(n, dtype=np.int64)
+    here = np.zeros(n, dtype=np.int64)  # region after the move (energy -> bookkeeping)
     f_hist = np.zeros(n_ticks + 1, dtype=np.int64)
     nb_hist = np.zeros(n_ticks + 1, dtype=np.int64)
     row_counts = np.zeros(ROW_D, dtype=np.int64)
     align = np.empty(3)
     align_w = np.empty(3)
+    tally = np.zeros(N_TALLY, dtype=np.int64)
+    counts = np.zeros(8, dtype=np.int64)      # scratch of the time-series records
+    # the phases' groups of arrays (section 11): the plan and motion heading, the avoidance and
+    # blocked state, the beacon memory and inbox, what step 2 sensed, the trip in progress
+    heading = (theta_a, theta, pcx, pcy, mdx, mdy)
+    motion = (blocked, avoiding, was_avoiding, moved, kappa)
+    memory = (omega, bvx, bvy, bsoc, binit, weight)
+    inbox = (ikey, idelta, ivx, ivy, iu)
+    sensed = (sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest)
+    trip = (last_left, voided, tick_left, role_left, acc)
 
     for run in range(n_runs):
         if stop[0] != 0:
@@ -895,432 +1363,20 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
                     bsoc[i, q] = st[ST_S + q]
                     binit[i, q] = st[ST_INIT + q] != 0.0
                     weight[i, q] = beacon_weight(omega[i, q], bsoc[i, q], binit[i, q], rho_f, rho_c, wform)
-        resources = 0
-        unloads = 0
-        deaths = 0
+        tally[:] = 0
         t_first = np.full(3, -1, dtype=np.int64)      # first entry into T, R; first row 5 [tick]
         run_id = runs[run]
 
-        for k in range(1, n_ticks + 1):
-            if stop[0] != 0:
-                break
-            milestones = 0                         # bit per milestone label reached this tick
-            # 1. spawn (A33)
-            new = -1                               # the robot spawned this tick: not in the snapshot
-            if spawned < n:
-                clear = True
-                for j in range(spawned):
-                    dx = x[j] - spawn_x
-                    dy = y[j] - spawn_y
-                    if dx * dx + dy * dy < touch2:
-                        clear = False
-                        break
-                if clear:
-                    new = spawned
-                    spawned += 1
-                    status[new] = ALIVE
-                    energy[new] = soc0 * e_cap
-                    search[new] = True             # its first heading is random (A33)
-
-            # 2. snapshot of the end of tick k-1: distances, links, beacon inboxes (section 5); the
-            # robot spawned this tick did not exist then: it senses nothing, is not sensed, is silent
-            sx[:spawned] = x[:spawned]
-            sy[:spawned] = y[:spawned]
-            for i in range(spawned):
-                if status[i] != ALIVE or role[i] == B:
-                    continue                       # only mobile robots sense, link and move
-                xi = x[i]
-                yi = y[i]
-                for j in range(spawned):
-                    dx = x[j] - xi
-                    dy = y[j] - yi
-                    d2[i, j] = dx * dx + dy * dy
-            n_beacons = 0
-            for i in range(spawned):
-                nb_cnt[i] = 0
-                mb_cnt[i] = 0
-                if status[i] == ALIVE and role[i] == B:
-                    beacons[n_beacons] = i
-                    n_beacons += 1
-            for i in range(spawned):
-                if status[i] != ALIVE or role[i] == B or i == new:
-                    continue
-                for q in range(n_beacons):
-                    b = beacons[q]
-                    if d2[i, b] >= comm2:
-                        continue
-                    if hard and min(x[i], x[b]) <= box[2] and max(x[i], x[b]) >= box[0] and \
-                            min(y[i], y[b]) <= box[3] and max(y[i], y[b]) >= box[1] and \
-                            segment_blocked(x[i], y[i], x[b], y[b], g):
-                        continue
-                    if los_bodies:
-                        occluded = False
-                        for o in range(spawned):
-                            if o != i and o != b and o != new and status[o] != UNSPAWNED and \
-                                    segment_point_dist2(x[i], y[i], x[b], y[b], x[o], y[o]) < r_body * r_body:
-                                occluded = True
-                                break
-                        if occluded:
-                            continue
-                    nb_list[i, nb_cnt[i]] = b
-                    nb_cnt[i] += 1
-                    mb_cnt[b] += 1
-            for i in range(spawned):
-                if status[i] != ALIVE:
-                    continue
-                if role[i] == B:
-                    links[i] = mb_cnt[i]
-                    continue
-                links[i] = nb_cnt[i]
-                best_omega = 0.0
-                no_r = True
-                near = -1
-                for x_key in range(3):
-                    s_hat[i, x_key] = 0.0
-                for q in range(nb_cnt[i]):
-                    b = nb_list[i, q]
-                    best_omega = max(best_omega, omega[b, s_c[i]])
-                    for x_key in range(3):
-                        if binit[b, x_key] and bsoc[b, x_key] > s_hat[i, x_key]:
-                            s_hat[i, x_key] = bsoc[b, x_key]
-                    if bvx[b, R] * bvx[b, R] + bvy[b, R] * bvy[b, R] > NO_GUIDANCE2:
-                        no_r = False
-                    if near < 0 or d2[i, b] < d2[i, near]:
-                        near = b
-                no_r_guidance[i] = no_r
-                if redecide == REDECIDE_BEACON_CHANGE and near != nearest[i]:
-                    immediate[i] = True
-                nearest[i] = near
-                if nb_cnt[i] == 0 or (bcast_update and not decided[i]):
-                    continue
-                # the broadcast (s_c, Delta, -v_m, u) heard by every beacon in range
-                gamma = reward if reg[i] == s_c[i] else 0.0
-                delta = gamma + lam * best_omega
-                mvx, mvy = broadcast_velocity(mode[i] == CHARGING, bcast_motion, v0, pcx[i], pcy[i], mdx[i], mdy[i])
-                used = max(0.0, soc_ref[i] - energy[i] / e_cap)
-                for q in range(nb_cnt[i]):
-                    b = nb_list[i, q]
-                    ikey[b, i] = s_c[i]
-                    idelta[b, i] = delta
-                    ivx[b, i] = mvx
-                    ivy[b, i] = mvy
-                    iu[b, i] = used
-            decided[:spawned] = False
-
-            # 3. region actions, completion, role transitions (rows 1-11), loads (sections 9, 10)
-            for i in range(spawned):
-                loaded_now[i] = False
-                if status[i] != ALIVE or role[i] == B:
-                    continue
-                r0 = role[i]
-                rg = reg[i]
-                if rg == REG_N and load[i] > 0 and take(table, sup, i, EV_UNLOAD):
-                    resources += load[i]
-                    unloads += 1
-                    load[i] = 0
-                if completion_last:
-                    if rg != NO_REGION:
-                        complete(i, rg, s_c, n_failed, mode)
-                elif rg == r0:                     # F_OUT in T, F_IN in N, R in R
-                    complete(i, r0, s_c, n_failed, mode)
-                row = choose_row(r0, mode[i], rg, nb_cnt[i], role_k1[i], role_k2[i], energy[i] / e_cap, s_hat[i],
-                                 visited_r[i], energy[i] == e_cap, load[i] > 0, no_r_guidance[i])
-                if row == 0 or (row == 3 and r0 == R):
-                    continue                       # row 3 in role R: already going to charge
-                if not take(table, sup, i, ROW_EVENT[row]):
-                    continue                       # the supervisor forbids it: the row does not fire
-                state = sup[i, 0]
-                role[i] = ROLE_OF_STATE[state]     # the role IS the supervisor's state
-                if state == S_R_CHARGING:
-                    mode[i] = CHARGING
-                elif mode[i] == CHARGING or row == 1:
-                    mode[i] = NORMAL
-                if row == 1:
-                    become_beacon(i, n_t, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
-                    avoiding[i] = False
-                    blocked[i] = 0
-                    immediate[i] = False
-                    search[i] = False
-                elif row == 5 and t_first[2] < 0:
-                    t_first[2] = k
-                    milestones |= 1 << LABEL_FIRST_ROW5
-                if row == 9:                       # A17: rows 9 and 11 complete N and T
-                    complete(i, F_IN, s_c, n_failed, mode)
-                elif row == 11:
-                    complete(i, F_OUT, s_c, n_failed, mode)
-                if (row == 10 or row == 11) and take(table, sup, i, EV_LOAD):
-                    load[i] = r_max
-                    loaded_now[i] = True
-                # 7.2 (A26): turn on the role changes inside a region (rows 3, 5-11); "any": row 2 too
-                if (row == 3 or row >= 5 or (row == 2 and turn_any)) and take(table, sup, i, EV_TURN_AROUND):
-                    theta_a[i] = wrap(theta[i] + PI)
-                    theta[i] = theta_a[i]
-                    pcy[i], pcx[i] = sincos(theta_a[i])
-                row_counts[row - 1] += 1
-
-            # 4. heading decisions (7.1, 7.3), countdowns, reconnect contact
-            for i in range(spawned):
-                if status[i] != ALIVE or role[i] == B:
-                    continue
-                if mode[i] == RECONNECT and nb_cnt[i] > 0:
-                    mode[i] = BACKTRACK
-                    bt_budget[i] = n_failed[i] * 0.5 * comm
-                    bt_travel[i] = 0.0
-                    immediate[i] = True
-                due = countdown[i] <= 0
-                if due:
-                    countdown[i] = n_t
-                countdown[i] -= 1
-                if not (due or immediate[i]):
-                    continue
-                immediate[i] = False
-                if mode[i] == BACKTRACK:
-                    gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, s_c[i])
-                    if gx == 0.0 and gy == 0.0:
-                        mode[i] = NORMAL
-                elif mode[i] != NORMAL:
-                    search[i] = False              # charging since: no decision left to make random
-                    continue
-                if search[i]:                      # a random search: no guidance, both draws taken
-                    search[i] = False
-                    gx, gy = 0.0, 0.0
-                elif mode[i] == NORMAL:
-                    key = role[i]
-                    gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, key)
-                    if gx == 0.0 and gy == 0.0:
-                        if key == F_IN:
-                            gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, R)
-                        elif key == R and (visited_r[i] or fallback_literal):
-                            gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, F_IN)
-                u = uniform(rng, 0, i)
-                o = (2.0 * uniform(rng, 0, i) - 1.0) * PI
-                theta_a[i] = follow_or_search(gx, gy, theta[i], u, o, eps)[0]
-                theta[i] = theta_a[i]
-                pcy[i], pcx[i] = sincos(theta_a[i])
-                decided[i] = True
-
-            # 5. avoidance (7.4) and translation (7.5) in ascending id
-            for i in range(spawned):
-                moved[i] = False
-                was_avoiding[i] = avoiding[i]
-                avoiding[i] = False
-                if status[i] != ALIVE or role[i] == B or mode[i] == CHARGING:
-                    continue
-                xi = x[i]
-                yi = y[i]
-                theta[i] = theta_a[i]
-                cx = pcx[i]
-                cy = pcy[i]
-                any_hit = False
-                near_wall = xi < ray_len or yi < ray_len or xi > field_w - ray_len or yi > field_h - ray_len
-                near_obstacle = hard and near_box(xi, yi, ray_len, box)
-                n_near = 0                         # bodies a ray or this tick's step can reach
-                for j in range(spawned):
-                    if d2[i, j] < ray_reach2 and j != i and status[j] != UNSPAWNED:
-                        close[n_near] = j
-                        n_near += 1
-                for r in range(N_RAYS if i != new else 0):
-                    hits[r] = np.inf
-                    rdx = cx * ray_c[r] - cy * ray_s[r]
-                    rdy = cy * ray_c[r] + cx * ray_s[r]
-                    best = np.inf
-                    if near_wall:
-                        best = min(best, ray_walls(xi, yi, rdx, rdy, field_w, field_h))
-                    if near_obstacle:
-                        c = G_CORNERS
-                        for e in range(4):
-                            f = (e + 1) % 4
-                            best = min(best, ray_segment(xi, yi, rdx, rdy, g[c + 2 * e], g[c + 2 * e + 1],
-                                                         g[c + 2 * f], g[c + 2 * f + 1]))
-                    for q in range(n_near):
-                        j = close[q]
-                        if j != new:               # the rays see the snapshot (section 5, A29)
-                            best = min(best, ray_disc(xi, yi, rdx, rdy, sx[j], sy[j], r_body))
-                    if best <= ray_len:
-                        hits[r] = best
-                        any_hit = True
-                if any_hit:
-                    active, offset = avoidance_offset(hits, ray_len)
-                    avoiding[i] = active
-                    theta[i] = wrap(theta_a[i] + offset)
-                    cy, cx = sincos(theta[i])
-                    if avoid_turn:
-                        theta_a[i] = theta[i]
-                        pcx[i] = cx
-                        pcy[i] = cy
-                elif redecide == REDECIDE_AVOID_CLEAR and was_avoiding[i]:
-                    immediate[i] = True
-                mdx[i] = cx
-                mdy[i] = cy
-                nx = xi + step * cx
-                ny = yi + step * cy
-                ok = r_body <= nx <= field_w - r_body and r_body <= ny <= field_h - r_body
-                if ok and hard and near_box(nx, ny, r_body, box):
-                    ok = not disc_hits_quad(nx, ny, r_body, g)
-                if ok:
-                    for q in range(n_near):
-                        j = close[q]
-                        if d2[i, j] < touch_reach2:
-                            dx = nx - x[j]
-                            dy = ny - y[j]
-                            if dx * dx + dy * dy < touch2:
-                                ok = False
-                                break
-                if ok:
-                    kappa[i] = 1.0
-                    if soft and inside_quad(xi, yi, g):
-                        kappa[i] = kappa_soft
-                        acc[i, 2] += step
-                    x[i] = nx
-                    y[i] = ny
-                    moved[i] = True
-                    blocked[i] = 0
-                    acc[i, 0] += step
-                    if mode[i] == RECONNECT:
-                        rc_travel[i] += step
-                        if rc_travel[i] >= d_rc:
-                            mode[i] = NORMAL
-                            immediate[i] = True
-                            search[i] = True
-                    elif mode[i] == BACKTRACK:
-                        bt_travel[i] += step
-                        if bt_travel[i] >= bt_budget[i]:
-                            mode[i] = NORMAL
-                            immediate[i] = True
-                else:
-                    blocked[i] += 1
-                    if blocked[i] >= blocked_limit:
-                        theta_a[i] = wrap(theta[i] + (2.0 * uniform(rng, 0, i) - 1.0) * PI)
-                        theta[i] = theta_a[i]
-                        pcy[i], pcx[i] = sincos(theta_a[i])
-                        blocked[i] = 0
-
-            # 6. energy (section 8), deaths (row X); 7. bookkeeping, trip records (sections 10, 12)
-            for i in range(spawned):
-                if status[i] != ALIVE:
-                    continue
-                mobile = role[i] != B
-                newreg = region_of(x[i], y[i], g)
-                energy[i], used = tick_energy(energy[i], pars, newreg == REG_R, mobile, links[i], moved[i], kappa[i],
-                                              avoiding[i], loaded_now[i])
-                acc[i, 1] += used
-                if energy[i] == 0.0:
-                    if take(table, sup, i, EV_DEPLETED):
-                        status[i] = DEAD
-                        deaths += 1
-                        continue
-                if newreg == s_c[i]:
-                    soc_ref[i] = energy[i] / e_cap
-                if newreg == REG_R:
-                    visited_r[i] = True
-                old = reg[i]
-                if old != newreg:
-                    trips, n_trips = region_change(i, k, old, newreg, role[i], last_left, voided, tick_left, role_left,
-                                                   acc, trips, n_trips, run_id)
-                    if newreg != NO_REGION:
-                        if newreg == REG_T and t_first[0] < 0:
-                            t_first[0] = k
-                            milestones |= 1 << LABEL_FIRST_T
-                        elif newreg == REG_R and t_first[1] < 0:
-                            t_first[1] = k
-                            milestones |= 1 << LABEL_FIRST_R
-                    reg[i] = newreg
-
-            # 8. beacon windows (section 6), decay and revert (row D, 7.3)
-            for i in range(spawned):
-                if status[i] != ALIVE or role[i] != B:
-                    continue
-                countdown[i] -= 1
-                if countdown[i] > 0:
-                    continue
-                countdown[i] = n_t
-                decays = beacon_update(omega[i], bvx[i], bvy[i], bsoc[i], binit[i], ikey[i], idelta[i],
-                                       ivx[i], ivy[i], iu[i], rho_w, rho_v, rho_p, phi_soc, eta_w)
-                ikey[i, :] = -1
-                for q in range(3):
-                    weight[i, q] = beacon_weight(omega[i, q], bsoc[i, q], binit[i, q], rho_f, rho_c, wform)
-                if decays and take(table, sup, i, EV_REVERT):
-                    role[i] = ROLE_OF_STATE[sup[i, 0]]     # s_prev, remembered by the beacon state
-                    mode[i] = RECONNECT
-                    n_failed[i] += 1
-                    rc_travel[i] = 0.0
-                    clear_memory(i, omega, bvx, bvy, bsoc, binit, weight)
-                    if take(table, sup, i, EV_TURN_AROUND):
-                        theta_a[i] = wrap(theta[i] + PI)
-                        theta[i] = theta_a[i]
-                        pcy[i], pcx[i] = sincos(theta_a[i])
-                    row_counts[ROW_D - 1] += 1
-
-            # 9. records
-            n_b = 0
-            for i in range(spawned):
-                role_k2[i] = role_k1[i]
-                role_k1[i] = role[i]
-                if status[i] == ALIVE and role[i] == B:
-                    n_b += 1
-            f_hist[k] = resources
-            nb_hist[k] = n_b
-            if k % n_t == 0 and k // n_t <= n_rec:
-                rec = series[run, k // n_t - 1]
-                rec[TS_K] = k
-                rec[TS_RESOURCES] = resources
-                rec[TS_TRIPS] = unloads
-                rec[TS_INTERRUPTIONS] = row_counts[1]
-                rec[TS_NEST_RECHARGES] = row_counts[2]
-                rec[TS_SESSIONS] = row_counts[3]
-                rec[TS_RATE] = resources - (f_hist[k - rate_w] if k >= rate_w else 0)
-                counts = np.zeros(8, dtype=np.int64)
-                soc_sum = 0.0
-                soc_b = 0.0
-                soc_m = 0.0
-                soc_min = np.inf
-                units_b = 0
-                for i in range(n):
-                    soc = energy[i] / e_cap
-                    if status[i] == UNSPAWNED:
-                        counts[3] += 1
-                        soc_sum += soc0
-                        continue
-                    soc_sum += soc
-                    if status[i] == DEAD:
-                        counts[2] += 1
-                    elif role[i] == B:
-                        counts[1] += 1
-                        soc_b += soc
-                        soc_min = min(soc_min, soc)
-                        units_b += load[i]
-                    else:
-                        counts[0] += 1
-                        counts[4 + role[i]] += 1
-                        soc_m += soc
-                rec[TS_MOBILE] = counts[0]
-                rec[TS_BEACONS] = counts[1]
-                rec[TS_DEAD] = counts[2]
-                rec[TS_UNSPAWNED] = counts[3]
-                rec[TS_F_OUT] = counts[4 + F_OUT]
-                rec[TS_F_IN] = counts[4 + F_IN]
-                rec[TS_R] = counts[4 + R]
-                rec[TS_SOC_SUM] = soc_sum
-                rec[TS_SOC_BEACONS] = soc_b
-                rec[TS_SOC_MOBILE] = soc_m
-                rec[TS_SOC_MIN_BEACON] = soc_min if counts[1] > 0 else np.nan
-                rec[TS_UNITS_BEACONS] = units_b
-                alignment(n, status, role, x, y, omega, bvx, bvy, g, align, align_w)
-                for q in range(3):
-                    rec[TS_ALIGN + q] = align[q]
-            for label in (LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5):
-                if milestones & (1 << label):
-                    snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, label, k, n, status, role, mode, x, y,
-                                               theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
-            if k % snap_every == 0:
-                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
-                                           y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
-            if frames and k % n_t == 0:
-                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_FRAME, k, n, status, role, mode, x,
-                                           y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
-            if k == n_ticks:
-                snaps, n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_END, k, n, status, role, mode, x,
-                                           y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
+        k = 1
+        while k <= n_ticks and stop[0] == 0:
+            trips = _room(trips, n_trips, n)
+            snaps = _room(snaps, n_snaps, SNAPS_PER_TICK * n)
+            k, spawned, n_trips, n_snaps = run_ticks(
+                opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, k, spawned, status, sup, role, mode,
+                role_k1, role_k2, x, y, energy, load, s_c, soc_ref, visited_r, n_failed, bt_budget, bt_travel,
+                rc_travel, countdown, immediate, search, decided, reg, loaded_now, here, heading, motion, memory,
+                inbox, sensed, trip, hits, close, n_near, counts, row_counts, t_first, tally, f_hist, nb_hist, series,
+                align, align_w, trips, n_trips, snaps, n_snaps)
 
         if start.shape[0] > 0:
             for i in range(n):
@@ -1358,12 +1414,12 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
 
         # per-run summary
         sm = summary[run]
-        sm[SM_RESOURCES] = resources
-        sm[SM_TRIPS] = unloads
+        sm[SM_RESOURCES] = tally[TL_RESOURCES]
+        sm[SM_TRIPS] = tally[TL_UNLOADS]
         sm[SM_INTERRUPTIONS] = row_counts[1]
         sm[SM_NEST_RECHARGES] = row_counts[2]
         sm[SM_SESSIONS] = row_counts[3]
-        sm[SM_DEATHS] = deaths
+        sm[SM_DEATHS] = tally[TL_DEATHS]
         n_b = 0
         n_m = 0
         units_b = 0

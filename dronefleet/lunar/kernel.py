@@ -129,13 +129,14 @@ N_TRIP = 11
 (SN_RUN, SN_LABEL, SN_K, SN_ROBOT, SN_STATUS, SN_ROLE, SN_MODE, SN_X, SN_Y, SN_HEADING, SN_SOC,
  SN_LOAD, SN_OMEGA, SN_VX, SN_VY, SN_S) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 15, 18, 21)
 N_SNAP = 24
-#: The most snapshots one tick can take: the three milestones, periodic, frame and end.
-SNAPS_PER_TICK = 6
+LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL_FRAME = range(6)
+#: The most snapshots one tick can take per robot: one per label, LABEL_FRAME being the last (the
+#: tick loop has no bounds checks: run_runs makes room for this many before each tick).
+SNAPS_PER_TICK = LABEL_FRAME + 1
 # A run's tallies (``tally``, int64): units deposited, unloads, deaths, and the milestone labels
 # reached this tick (a bit per label).
 TL_RESOURCES, TL_UNLOADS, TL_DEATHS, TL_MILESTONES = range(4)
 N_TALLY = 4
-LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL_FRAME = range(6)
 # Columns of a robot's state in ``run_runs(..., start)`` (a hand-built start, read back at the end).
 (ST_STATUS, ST_SUP, ST_MODE, ST_X, ST_Y, ST_THETA_A, ST_THETA, ST_ENERGY, ST_LOAD, ST_S_C, ST_SOC_REF,
  ST_VISITED_R, ST_N_FAILED, ST_COUNTDOWN, ST_ROLE_K1, ST_ROLE_K2, ST_BLOCKED, ST_BT_BUDGET, ST_BT_TRAVEL,

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     import pyarrow
 
 __all__ = ["ENTRY_POINT_GROUP", "Field", "ScenarioContract", "REQUIRED", "OPTIONAL", "StudyContext", "FigureStudy",
-           "contract_problems", "check_configurations"]
+           "contract_problems", "study_problems", "check_configurations"]
 
 #: Entry-point group of scenarios installed from other packages: name -> the scenario object.
 ENTRY_POINT_GROUP = "dronefleet.scenarios"
@@ -198,6 +198,27 @@ class FigureStudy(Protocol):
 
     def check(self, study: StudyContext, figure: str) -> list[str]:
         """Re-run a few of the figure's runs and compare them with its tables: the differences, one line each."""
+
+
+#: The members of a :class:`FigureStudy`: attributes with their types, then its functions and their parameters.
+_STUDY_TYPES = {"TITLE": str, "QUICK": str, "FIGURES": tuple, "TABLE_COLUMNS": Mapping}
+_STUDY_FUNCTIONS = {"run_together": ("study", "figures"), "tidy": ("study", "figure"), "draw": ("study", "figure"),
+                    "check": ("study", "figure")}
+
+
+def study_problems(study: object) -> list[str]:
+    """What keeps ``study`` (a ``study()`` hook's result) from being a :class:`FigureStudy`, one
+    phrase each (empty: it is one), checked without running anything."""
+    problems = [f"its {name} is a {type(getattr(study, name, None)).__name__}, not a {kind.__name__}"
+                for name, kind in _STUDY_TYPES.items() if not isinstance(getattr(study, name, None), kind)]
+    if isinstance(getattr(study, "FIGURES", None), tuple):
+        problems += [f"its figure {figure!r} is not a string" for figure in study.FIGURES
+                     if not isinstance(figure, str)]
+    for name, parameters in _STUDY_FUNCTIONS.items():
+        function = getattr(study, name, None)
+        if not callable(function) or not _takes(function, len(parameters)):
+            problems.append(f"its {name} does not take ({', '.join(parameters)})")
+    return problems
 
 
 def check_configurations(table: pandas.DataFrame, columns: Iterable[str], path: Path, limit: int,

@@ -57,7 +57,7 @@ import pyarrow.parquet as pq
 
 from . import console, executors, scenarios
 from .config import ConfigError, shipped_config
-from .contract import FigureStudy
+from .contract import FigureStudy, study_problems
 from .datafiles import DataError, checked_column, parquet_rows, parquet_schema, read_parquet
 from .delivery import analysis
 from .outputs import probe_folders, writing
@@ -468,6 +468,11 @@ def studies() -> dict[str, FigureStudy]:
     for name, scenario in scenarios.loading().items():
         try:
             study = _study(name, scenario)
+            problems = [] if study is None or name in scenarios.SCENARIOS else study_problems(study)
+            if problems:
+                scenarios.warn_left_out(name, f"its study is no FigureStudy (docs/scenario-contract.md): "
+                                              f"{'; '.join(problems)}")
+                continue
             figures = () if study is None else tuple(study.FIGURES)
         except Exception as error:  # the installed package's own error, whatever it is: the user must see it
             if name in scenarios.SCENARIOS:

@@ -155,6 +155,9 @@ BROKEN = {
                      "its study fails: RuntimeError: no study today"),
     "study takes fig10": (lambda name: walk(name, STUDY.format(figures='"fig10",')),
                           "its study names its figure 'fig10', which 'replenishment' has"),
+    "study without QUICK": (lambda name: walk(name, STUDY.format(figures='"walks",').replace(
+        '    QUICK = "the same"\n', '')), "its study is no FigureStudy (docs/scenario-contract.md): its QUICK is a "
+                                       "NoneType, not a str"),
     "import hangs": (lambda name: "import time\ntime.sleep(3600)\n", "fails to load: ImportError: its import "
                                                                        "does not end within 5 s"),
     "import calls os._exit": (lambda name: "import os\nos._exit(0)\n",
@@ -388,3 +391,16 @@ def test_the_installed_example_runs_through_run_a_local_sweep_and_the_api(exampl
                           "n_robots=5, steps=80); print(json.dumps(r.summary.to_dict('records')))"],
                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300, check=True)
     assert json.loads(api.stdout) == ran
+
+
+def test_every_built_in_study_is_a_figure_study_by_the_check_installed_ones_meet():
+    from dronefleet import reproduce
+    from dronefleet.contract import study_problems
+
+    assert {name: study_problems(study) for name, study in reproduce.studies().items()} == \
+        {name: [] for name in ("delivery", "replenishment", "items", "lunar")}
+    assert study_problems(object()) == [
+        "its TITLE is a NoneType, not a str", "its QUICK is a NoneType, not a str",
+        "its FIGURES is a NoneType, not a tuple", "its TABLE_COLUMNS is a NoneType, not a Mapping",
+        "its run_together does not take (study, figures)", "its tidy does not take (study, figure)",
+        "its draw does not take (study, figure)", "its check does not take (study, figure)"]

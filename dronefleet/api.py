@@ -167,6 +167,8 @@ class Run:
         from .outputs import writing
         from .records import write_tables
 
+        if not isinstance(out, (str, os.PathLike)):
+            raise ConfigError(f"out={_show(out)}: expected the path of a folder for the run's tables")
         out = Path(os.path.normpath(out))
         check_outputs(out, None, overwrite, self.scenario.tables)
         with writing(out):

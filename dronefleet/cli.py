@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import Any
 
 from . import console, provenance, scenarios, sweeps
-from .config import SHIPPED_FOLDERS, ConfigError, _show, named_file, shipped_config, shipped_files
+from .config import (SHIPPED_FOLDERS, ConfigError, _show, check_numba_cache_dir, named_file, shipped_config,
+                     shipped_files)
 from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, check_output_file, probe_folders, writing
 
@@ -474,6 +475,7 @@ def main(argv: list[str] | None = None) -> int:
         # within the try: building the parser of reproduce imports pandas and numba (a second)
         args = build_parser(reproduce_arguments="reproduce" in argv).parse_args(argv)
         console.configure(args.level)
+        check_numba_cache_dir()  # an environment the kernels cannot be cached in: before any work
         return args.func(args)
     # bad input (config, sweep, fleet file), refused before any work; a scenario's hook that broke its contract
     except (ConfigError, scenarios.HookError) as error:

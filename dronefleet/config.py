@@ -26,6 +26,7 @@ import os
 import re
 import reprlib
 import stat
+import tempfile
 import tomllib
 from os import PathLike
 from pathlib import Path
@@ -287,6 +288,25 @@ def _parse_override(text: Any, resolve: Callable[[str], str]) -> tuple[str, Any]
         value = raw
     check_depth(value, "", f"--set {key}")
     return name, value
+
+
+def check_numba_cache_dir(environ: Mapping[str, str] = os.environ) -> None:
+    """ConfigError (one line) if numba's ``NUMBA_CACHE_DIR`` is set to a folder that cannot hold the
+    compiled kernels (a file, a folder that cannot be made or written): every process would compile
+    them again, silently, into a temporary folder (:func:`dronefleet.jit.cache_root`)."""
+    value = environ.get("NUMBA_CACHE_DIR", "")
+    if not value:
+        return
+    folder = Path(value)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except (OSError, ValueError) as error:  # ValueError: a NUL byte in the path
+        reason = error.strerror if isinstance(error, OSError) and error.strerror else type(error).__name__
+        shown = repr(value) if len(value) <= 300 else _show(value)  # a path is shown whole
+        raise ConfigError(f"NUMBA_CACHE_DIR={shown} is not a folder where the compiled kernels can be "
+                          f"written ({reason}); allowed: a writable folder, or unset") from None
 
 
 def read_toml(path: str | PathLike, kind: str = "config file") -> tuple[str, dict[str, Any]]:

@@ -21,6 +21,7 @@ import os
 import sys
 import threading
 import time
+import weakref
 from collections.abc import Iterator
 from typing import Any, NoReturn
 
@@ -151,6 +152,11 @@ def compile_notice(what: str) -> Iterator[None]:
         yield
 
 
+#: Threads (not daemons) that a plugin's import started (:func:`dronefleet.plugins.importing`): a
+#: finished command does not wait for them.
+PLUGIN_THREADS: weakref.WeakSet = weakref.WeakSet()
+
+
 def exit_now(code: int) -> NoReturn:
     """End the process of a finished command with exit code ``code``, skipping the interpreter's
     teardown.
@@ -160,9 +166,12 @@ def exit_now(code: int) -> NoReturn:
     memory the system takes back at once anyway. What an exit does that has effects is kept:
     the atexit handlers (logging's last flush, temporary folders' removal) run, and stdout and
     stderr are flushed. With a thread other than daemons still running, or output that cannot be
-    flushed (a reader gone), the usual exit happens instead, with its usual behaviour.
+    flushed (a reader gone), the usual exit happens instead, with its usual behaviour; a thread a
+    plugin's import started (:data:`PLUGIN_THREADS`) is not waited for: it would hold the
+    finished command for good.
     """
-    if any(thread is not threading.main_thread() and not thread.daemon for thread in threading.enumerate()):
+    if any(thread is not threading.main_thread() and not thread.daemon and thread not in PLUGIN_THREADS
+           for thread in threading.enumerate()):
         sys.exit(code)
     try:
         atexit._run_exitfuncs()  # what the usual exit runs (logging.shutdown, weakref finalizers)

@@ -132,7 +132,7 @@ def reused_workers() -> Iterator[None]:
     finally:
         pools, _kept = _kept, None
         for pool in pools:
-            pool.shutdown()
+            _end(pool)
 
 
 def _worker_pool():
@@ -149,9 +149,15 @@ def _worker_pool():
 
 def _release(pool):
     if _kept is None:
-        pool.shutdown()
+        _end(pool)
     else:
         _kept.append(pool)
+
+
+def _end(pool):
+    """Shut ``pool`` down, its worker killed: it holds no item (done, or stopped) and its end must
+    not wait on it: a thread a plugin started at import would keep it, and this process, alive."""
+    pool.shutdown(kill_workers=True)
 
 
 def _submit(pool, function, item):
@@ -232,8 +238,9 @@ def local(function: Callable[[Item], Result], items: Iterable[Item], jobs: int) 
             for process in _workers(pool):
                 with contextlib.suppress(ProcessLookupError):
                     os.kill(process.pid, signal.SIGINT)
+        wait(holding, timeout=interrupt.GRACE_S)  # each stops at its next check point, writing nothing more
         for pool, _ in holding.values():
-            pool.shutdown()
+            _end(pool)
 
 
 class WorkerDied(RuntimeError):

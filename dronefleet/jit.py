@@ -27,18 +27,22 @@ linear algebra). If scipy.linalg is already imported, there is nothing to save a
 as usual.
 """
 
+import atexit
 import contextlib
 import functools
 import hashlib
 import importlib
 import os
 import re
+import shutil
 import sys
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numba
+
+from .config import check_numba_cache_dir
 
 __all__ = ["borrowing", "cache_root", "njit", "source_digest"]
 
@@ -117,9 +121,11 @@ def _writable(folder: Path) -> bool:
 @functools.cache
 def cache_root(numba_cache_dir: str) -> Path:
     """Where the kernels' cache folders go (see the module doc), given numba's ``NUMBA_CACHE_DIR``
-    (empty: unset). The first of them that can be written; if none can, a folder of this
-    process's own (every kernel compiles, and nothing stale can load)."""
+    (empty: unset; ConfigError if it cannot be written). The first of them that can be written; if
+    none can, a folder of this process's own, removed at its end (every kernel compiles, and
+    nothing stale can load)."""
     if numba_cache_dir:
+        check_numba_cache_dir({"NUMBA_CACHE_DIR": numba_cache_dir})
         candidates = [Path(numba_cache_dir)]
     else:
         user_cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
@@ -127,7 +133,9 @@ def cache_root(numba_cache_dir: str) -> Path:
     for candidate in candidates:
         if _writable(candidate):
             return candidate
-    return Path(tempfile.mkdtemp(prefix="dronefleet-kernels-"))
+    private = tempfile.mkdtemp(prefix="dronefleet-kernels-")
+    atexit.register(shutil.rmtree, private, ignore_errors=True)
+    return Path(private)
 
 
 @contextlib.contextmanager

@@ -22,6 +22,7 @@ import threading
 from collections.abc import Iterator
 
 from .config import _show
+from .console import PLUGIN_THREADS
 
 logger = logging.getLogger(__name__)
 
@@ -81,6 +82,8 @@ def importing(module_name: str, what: str, notice_s: float = IMPORT_NOTICE_S) ->
         f"dronefleet: still importing module {module_name!r} of {what} after {notice_s:g} s (Ctrl-C stops)"))
     notice.daemon = True
     notice.start()
+    working_directory = os.getcwd()  # relative paths of the command (--out, a config) mean what they meant
+    threads = set(threading.enumerate())
     try:
         problem = None if module_name in sys.modules else _import_problem(module_name, tuple(sys.path),
                                                                           IMPORT_LIMIT_S)
@@ -93,3 +96,8 @@ def importing(module_name: str, what: str, notice_s: float = IMPORT_NOTICE_S) ->
         raise KeyboardInterrupt(f"while importing module {module_name!r} of {what}") from None
     finally:
         notice.cancel()
+        PLUGIN_THREADS.update(thread for thread in threading.enumerate() if thread not in threads and not thread.daemon)
+        if os.getcwd() != working_directory:
+            logger.warning(f"dronefleet: warning: module {module_name!r} of {what} changed the working directory "
+                           f"on import; changed back to {working_directory!r}")
+            os.chdir(working_directory)

@@ -117,9 +117,9 @@ class Scenario:
             return getattr(self.module, hook)(*args)
         except SystemExit as exiting:
             raise self.problem(hook, f"called sys.exit({exiting.code!r})") from None
-        except ConfigError:
+        except (ConfigError, KeyboardInterrupt):
             raise
-        except Exception as error:
+        except BaseException as error:  # not only Exception: a plugin's BaseException would be a traceback
             if self.builtin:
                 raise
             raise self.problem(hook, f"raised {type(error).__name__}: {error}") from error
@@ -148,7 +148,12 @@ class Scenario:
 
     def replicates(self, config: Any) -> range | None:
         """The replicates a run of ``config`` holds; None if it is the one its seed names."""
-        return self._hook("replicates", config) if hasattr(self.module, "replicates") else None
+        if not hasattr(self.module, "replicates"):
+            return None
+        replicates = self._hook("replicates", config)
+        if not isinstance(replicates, range):
+            raise self.problem("replicates", f"returned {type(replicates).__name__}, not a range of replicates")
+        return replicates
 
     def outdated(self, config: Any, summary: Path) -> bool:
         return hasattr(self.module, "outdated") and self._hook("outdated", config, summary)
@@ -176,16 +181,37 @@ class Scenario:
             if not isinstance(table, pa.Table):
                 raise self.problem("simulate", f"returned its table {name!r} as {type(table).__name__}, "
                                                 "not a pyarrow Table")
+        if not self.builtin:  # what a sweep would refuse as damage, said now, of the hook
+            schemas = self.table_schemas()
+            for name, table in tables.items():
+                columns = {field.name: str(field.type) for field in table.schema}
+                if name in schemas and columns != {field.name: str(field.type) for field in schemas[name]}:
+                    raise self.problem("simulate", f"returned its table {name!r} with the columns {columns}, "
+                                                    f"not those of its table_schemas()")
+            replicates = len(self.replicates(config) or range(1))
+            if tables["summary"].num_rows != replicates:
+                raise self.problem("simulate", f"returned a summary of {tables['summary'].num_rows} rows, not one "
+                                                f"per replicate ({replicates})")
         return tables
 
     def format_summary(self, tables: Mapping[str, pyarrow.Table]) -> str:
         return self._text("format_summary", tables)
 
     def describe(self, config: Any) -> str:
-        return self._text("describe", config)
+        """One line (the head of ``dronefleet run``)."""
+        text = self._text("describe", config)
+        if not text.isprintable():
+            raise self.problem("describe", f"returned {_show(text)}, not one line of printable text")
+        return text
 
     def label(self, config: Any) -> str:
-        return self._text("label", config)
+        """A tag of the default run folder's name: one path component."""
+        text = self._text("label", config)
+        if not (text.isprintable() and 0 < len(text) <= 100) or any(c in text for c in "/\\") or \
+                text in (".", ".."):
+            raise self.problem("label", f"returned {_show(text)}, not a tag of at most 100 printable characters "
+                                        "without / or \\ (a folder name)")
+        return text
 
     @property
     def format_bounds(self) -> Callable | None:

@@ -1307,7 +1307,7 @@ def run_command(args: argparse.Namespace) -> int:
         with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # with --jobs 1 its runs run here
             ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
     except KeyboardInterrupt:
-        log.warning(f"\nsweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
+        log.warning(f"sweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
         return 130  # the shell's code for a command stopped by Ctrl-C
     wall = time.perf_counter() - start
     log.info(f"sweep {sweep.name}: ran {ran}, skipped {len(runs) - ran} done before, {len(failures)} failed, "

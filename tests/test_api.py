@@ -294,3 +294,10 @@ def test_a_sweep_never_writes_over_files_it_did_not_write(folder, tmp_path, monk
     assert "\n" not in message and ("notes.txt" in message if folder != "of a summary table" else
                                     "is not a summary table that dronefleet sweep collect wrote" in message), message
     assert {path: path.read_bytes() for path in mine.iterdir()} == before
+
+
+@pytest.mark.parametrize("out", [5, None, ["a"]])
+def test_save_to_something_not_a_path_is_refused_in_one_line(out):
+    run = dronefleet.run("replenishment", trials=1, ticks=10)
+    with pytest.raises(ConfigError, match=r"^out=.*: expected the path of a folder for the run's tables$"):
+        run.save(out)

@@ -134,3 +134,25 @@ def test_a_kernel_compiled_before_an_edit_of_a_module_it_calls_is_not_loaded(tmp
     restored, hits = _python(tmp_path, code)
     assert (restored, hits) == (first, "1")  # the unedited source's kernel is found again
     assert list((copy / "__pycache__").glob("kernels-*"))  # the package's own __pycache__, not a user folder
+
+
+@pytest.mark.parametrize("kind", ["file", "under a file"])
+def test_a_numba_cache_dir_where_kernels_cannot_be_written_is_refused_in_one_line(tmp_path, kind):
+    afile = tmp_path / "afile"
+    afile.write_text("mine\n")
+    value = afile if kind == "file" else afile / "cache"
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(value)}
+    done = subprocess.run([sys.executable, "-m", "dronefleet", "run", "replenishment", "--set", "trials=1",
+                           "--set", "ticks=10", "--out", str(tmp_path / "out")], capture_output=True, text=True,
+                          env=env, timeout=300)
+    assert done.returncode == 2 and len(done.stderr.splitlines()) == 1, done.stderr
+    assert f"NUMBA_CACHE_DIR={str(value)!r} is not a folder where the compiled kernels can be written" in done.stderr
+    assert not (tmp_path / "out").exists() and afile.read_text() == "mine\n"
+
+
+def test_with_no_writable_cache_folder_the_private_one_is_removed_at_exit(tmp_path):
+    code = ("import atexit, sys; from pathlib import Path; from dronefleet import jit; "
+            "jit._writable = lambda folder: False; root = jit.cache_root(''); print(root); "
+            "assert root.is_dir() and root.name.startswith('dronefleet-kernels-')")
+    root = Path(_python(tmp_path, code)[0])
+    assert not root.exists()

@@ -169,8 +169,18 @@ def test_a_built_in_stays_trusted_in_a_worker_process_and_an_installed_one_is_ch
      "load returned NoneType, not a config"),
     ("def describe(config):\n    raise KeyError('steps')\n", "describe raised KeyError: 'steps'"),
     ("def format_summary(tables):\n    raise ValueError('no rows')\n", "format_summary raised ValueError: no rows"),
+    ("class Boom(BaseException):\n    pass\ndef simulate(config):\n    raise Boom('boom')\n",
+     "simulate raised Boom: boom"),
+    ("def simulate(config):\n    t = _simulate(config)\n    return {**t, 'robots': t['robots'].append_column("
+     "'extra', t['robots'].column('x'))}\n", "simulate returned its table 'robots' with the columns"),
+    ("import pyarrow as pa\ndef simulate(config):\n    t = _simulate(config)\n"
+     "    return {**t, 'summary': pa.concat_tables([t['summary'], t['summary']])}\n",
+     "simulate returned a summary of 2 rows, not one per replicate (1)"),
+    ("def describe(config):\n    return 'walk\\n\\x1b[2Jcleared'\n", "describe returned 'walk\\n\\x1b[2Jcleared', not one line"),
+    ("def replicates(config):\n    return [1, 2, 3]\n", "replicates returned list, not a range"),
 ], ids=["simulate-raises", "simulate-list", "simulate-no-summary", "simulate-dicts", "load-none",
-        "describe-raises", "format-summary-raises"])
+        "describe-raises", "format-summary-raises", "simulate-base-exception", "simulate-other-columns",
+        "simulate-two-summary-rows", "describe-not-one-line", "replicates-a-list"])
 def test_a_hook_that_breaks_the_contract_is_one_line_naming_it(tmp_path, monkeypatch, capsys, hooks, fragment):
     name = plugin(tmp_path, monkeypatch, hooks)
     refused(capsys, ["run", config_file(tmp_path, name), "--out", tmp_path / "out"], f"scenario '{name}': its {fragment}")
@@ -201,3 +211,44 @@ def test_replay_data_that_is_no_page_is_refused_in_one_line(tmp_path, monkeypatc
     refused(capsys, ["replay", run, "--out", tmp_path / "page.html"], f"scenario '{name}': its {fragment}")
     assert not (tmp_path / "page.html").exists()
     assert pq.read_table(run / "summary.parquet").num_rows == 1  # the run itself is kept
+
+
+def test_a_base_exception_of_a_sweeps_simulate_is_one_failed_run(tmp_path, monkeypatch):
+    name = plugin(tmp_path, monkeypatch, "class Boom(BaseException):\n    pass\n" + FIRST_DIES.format("raise Boom('boom')"))
+    (tmp_path / "walks.toml").write_text(SWEEP.format(name=name))
+    for jobs in ("1", "2"):
+        done = dronefleet_process(tmp_path, "sweep", "run", "walks.toml", "--jobs", jobs, "--results", f"res{jobs}")
+        assert done.returncode == 1 and "Traceback" not in done.stderr, done.stderr
+        assert "its simulate raised Boom: boom" in done.stderr and "1 failed" in done.stdout + done.stderr, done.stderr
+
+
+THREAD = "import threading, time\nthreading.Thread(target=lambda: time.sleep(3600)).start()\n"
+
+
+def test_a_plugin_whose_import_starts_a_thread_that_never_ends_does_not_hold_the_command(tmp_path, monkeypatch):
+    # its contained simulate's worker cannot end by itself: the command kills it once it has the tables
+    name = plugin(tmp_path, monkeypatch, THREAD)
+    done = dronefleet_process(tmp_path, "run", config_file(tmp_path, name), "--out", "out")
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "out" / "summary.parquet").is_file()
+    (tmp_path / "walks.toml").write_text(SWEEP.format(name=name))
+    done = dronefleet_process(tmp_path, "sweep", "run", "walks.toml", "--jobs", "2", "--results", "res")
+    assert done.returncode == 0, done.stderr
+
+
+def test_an_import_that_changes_the_working_directory_has_it_changed_back(tmp_path, monkeypatch):
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    name = plugin(tmp_path, monkeypatch, f"import os\nos.chdir({str(elsewhere)!r})\n")
+    done = dronefleet_process(tmp_path, "run", config_file(tmp_path, name), "--out", "out")
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "out" / "summary.parquet").is_file() and not (elsewhere / "out").exists()
+    assert "changed the working directory on import" in done.stderr
+
+
+@pytest.mark.parametrize("label", ["../../escaped", "/tmp/abs", "", "a\\nb"])
+def test_a_label_that_is_no_folder_name_never_places_the_default_run_folder(tmp_path, monkeypatch, capsys, label):
+    name = plugin(tmp_path, monkeypatch, f"def label(config):\n    return {label!r}\n")
+    monkeypatch.chdir(tmp_path)
+    refused(capsys, ["run", config_file(tmp_path, name)], f"scenario '{name}': its label returned")
+    assert not (tmp_path / "results").exists() and not (tmp_path.parent / "escaped").exists()

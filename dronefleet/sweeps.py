@@ -720,6 +720,16 @@ def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[tuple[str, ...], 
     return None
 
 
+def dataset_holding(path: str | os.PathLike) -> Path | None:
+    """The sweep dataset a folder ``path`` would lie in (the nearest folder above it holding a
+    :data:`LAYOUT_FILE`, or the summary partitions of a dataset written before that file), or
+    None: readers take a dataset's folders whole, so a run folder in one adds rows to it."""
+    for folder in Path(os.path.abspath(path)).parents:
+        if os.path.lexists(folder / LAYOUT_FILE) or _found_layout(folder, ("summary",)) is not None:
+            return folder
+    return None
+
+
 def _read_layout(record: Path, out: Path) -> tuple[tuple[str, ...], str | None]:
     """The partition keys and the scenario (None in a record written before it held one) of the
     layout file ``record``: ``{"keys": [names], "scenario": name}``, read as data (a regular file

@@ -104,6 +104,7 @@ import math
 import os
 import re
 import shlex
+import stat
 import sys
 import time
 import traceback
@@ -655,6 +656,22 @@ def damage(run: Run, out: Path) -> str | None:
     return None
 
 
+def _check_part_files(run: Run, out: Path) -> None:
+    """Refuse (SweepError, one line naming it) a folder where a file of ``run`` goes: the run's
+    write renames its file over it, which fails for a folder only (a special file or a link is
+    replaced, as a damaged part), so every run would be redone to fail the same way. The
+    user's folder is not removed."""
+    for table in run.scenario.tables:
+        path = run.path(out, table)
+        try:
+            folder = stat.S_ISDIR(os.lstat(path).st_mode)
+        except OSError:  # absent (or its folder is): the run writes it
+            continue
+        if folder:
+            raise SweepError(f"the dataset {out} is damaged: {str(path)!r}, the {table} file of run {run.partition}, "
+                             "is a folder, which the run cannot replace: move or remove it")
+
+
 def inspect(run: Run, out: Path) -> tuple[str, str | None]:
     """``(state, why)``: :func:`state`, with :func:`damage`'s line for a damaged run (else None)."""
     summary = run.path(out, "summary")
@@ -978,6 +995,7 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
     check_layout(sweep, out)
     todo = []
     for run in runs:
+        _check_part_files(run, out)
         found, problem = inspect(run, out)
         if found == "damaged":
             _report(f"{problem}: running {run.partition} again")

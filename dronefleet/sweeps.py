@@ -794,8 +794,9 @@ def _found_scenario(out: Path, keys: tuple[str, ...]) -> str | None:
 
 def _check_owned(sweep: Sweep, out: Path) -> None:
     """Refuse a folder ``out`` that is not absent, empty, a dataset (its :data:`LAYOUT_FILE`, or the
-    partitions of one written before it) or a folder of only what dronefleet writes there (the
-    script and logs of ``sweep plan``): a sweep would write among the user's files and replace them."""
+    partitions of one written before it: its tables' folders hold nothing else) or a folder of only
+    what dronefleet writes there (the script and logs of ``sweep plan``): a sweep would write among
+    the user's files and replace them."""
     if not out.is_dir() or os.path.lexists(out / LAYOUT_FILE):
         return
     ours = {*sweep.scenario.tables, LAYOUT_FILE, COLLECTED_FILE, f"{sweep.name}.sbatch", *SIDE_FOLDERS}
@@ -808,6 +809,40 @@ def _check_owned(sweep: Sweep, out: Path) -> None:
         raise SweepError(f"{out} is not a sweep dataset and holds files dronefleet did not write "
                          f"({_shown(foreign[0], 40)}{more}), which a sweep could replace: give an absent or empty "
                          "folder, or a dataset dronefleet wrote (another --results or [sweep] name, or out=)")
+    stray = next(filter(None, (_not_a_part(out / table) for table in sweep.scenario.tables)), None)
+    if stray is not None:  # e.g. the user's own summary/ folder: a sweep would write among its files
+        raise SweepError(f"{out} is not a sweep dataset: its {_shown(os.path.relpath(stray, out), 80)} is not a "
+                         "run's part, and a table's "
+                         "folder holds only <key>=<value>/.../part-0.parquet: give an absent or empty folder, or a "
+                         "dataset dronefleet wrote (another --results or [sweep] name, or out=)")
+
+
+#: What a table's folder of a dataset holds: partition folders (``<key>=<value>``), then the
+#: runs' parts and the temporary files of their atomic writes (:func:`dronefleet.records.write_atomic`).
+_PARTITION_FOLDER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*=.*", re.S)
+_PART_FILE = re.compile(r"part-0\.parquet|\.part-0\.parquet\..*\.tmp", re.S)
+
+
+def _not_a_part(top: Path) -> str | None:
+    """The first path in the table's folder ``top`` of a dataset that a dataset does not hold
+    there (see :data:`_PARTITION_FOLDER`), or None (also if it is absent, or no folder)."""
+    if not top.is_dir():
+        return None
+    try:
+        for root, folders, files in os.walk(top, onerror=_raise):
+            for name in folders:
+                if not _PARTITION_FOLDER.fullmatch(name):
+                    return os.path.join(root, name)
+            for name in files:
+                if root == str(top) or not _PART_FILE.fullmatch(name):
+                    return os.path.join(root, name)
+    except OSError as error:
+        raise SweepError(f"cannot read the folder {top} ({error.strerror or error})") from None
+    return None
+
+
+def _raise(error: OSError) -> None:
+    raise error
 
 
 def check_layout(sweep: Sweep, out: Path) -> None:

@@ -255,7 +255,7 @@ TAMPERED_CONTENTS = [
     ("attempts", first_set("return_soc", float("inf")), "column 'return_soc' holds inf at row 0"),
     ("attempts", without("outcome"), "has no column 'outcome'"),
     ("attempts", lambda t: with_column("takeoff_s", t["takeoff_s"].cast(pa.string()))(t),
-     "column 'takeoff_s' is string, not is_floating"),
+     "column 'takeoff_s' is string, not a float"),
     ("orders", first_set("order_id", 7), "column 'order_id' holds 7 at row 0; allowed: the row number"),
     ("orders", first_set("distance_m", -1.0), "column 'distance_m' holds -1.0 at row 0"),
     ("orders", without("distance_m"), "has no column 'distance_m'"),

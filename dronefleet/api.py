@@ -161,7 +161,7 @@ class Run:
         ------
         dronefleet.outputs.OutputError
             (a ConfigError) ``out`` cannot take the run: a file, a folder of other files, a
-            run without ``overwrite``, not writable, or a write that failed.
+            run without ``overwrite``, a folder in a sweep dataset, not writable, or a write that failed.
         """
         from .cli import check_outputs
         from .outputs import writing

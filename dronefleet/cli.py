@@ -40,9 +40,9 @@ def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: I
     """Refuse, before any work, outputs that the run could not write or would silently replace.
 
     ``out`` must be absent, an empty folder, or (with ``overwrite``) a run folder (of the table
-    names ``tables``, by default delivery's); its parent and ``save_fleet``'s folder must be
-    writable; ``save_fleet`` must not exist unless ``overwrite``, and never be a folder or a
-    special file (a named pipe, a device).
+    names ``tables``, by default delivery's), and lie in no sweep dataset; its parent and
+    ``save_fleet``'s folder must be writable; ``save_fleet`` must not exist unless ``overwrite``,
+    and never be a folder or a special file (a named pipe, a device).
     """
     from .delivery.records import TABLES
     from .records import clean_leftovers, run_dir_state
@@ -61,6 +61,10 @@ def check_outputs(out: Path, save_fleet: Path | None, overwrite: bool, tables: I
     if save_fleet is not None and Path(os.path.abspath(save_fleet)).is_relative_to(os.path.abspath(out)):
         raise OutputError(f"--save-fleet {str(save_fleet)!r} lies inside --out {str(out)!r}, which is written "
                           "(and replaced) whole; save the fleet outside it")
+    dataset = sweeps.dataset_holding(out)
+    if dataset is not None:
+        raise OutputError(f"--out {str(out)!r} lies in the sweep dataset {str(dataset)!r}, whose readers would "
+                          "take the run for rows of the sweep: give a folder outside it")
     with writing(out):
         clean_leftovers(out)  # first: it may put back a run that a killed --overwrite had set aside
         state = run_dir_state(out, tables or TABLES)

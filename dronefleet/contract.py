@@ -221,6 +221,20 @@ def study_problems(study: object) -> list[str]:
     return problems
 
 
+def check_experiments(table: pandas.DataFrame, path: Path, known: Iterable[str]) -> None:
+    """Refuse (SweepError, one line naming the file ``path`` and the value) an ``experiment`` value
+    of a figure's table that is not one of ``known`` (the figure's experiments): it names the
+    sweep file a check runs again, so a tampered one must not become a path."""
+    from .config import SweepError, one_line
+
+    known = tuple(known)
+    unknown = sorted(set(table["experiment"]) - set(known))
+    if unknown:
+        shown = one_line(unknown[0])
+        shown = repr(shown if len(shown) <= 40 else shown[:37] + "...")
+        raise SweepError(f"{path}: experiment {shown} is not one of this figure's ({', '.join(known)})")
+
+
 def check_configurations(table: pandas.DataFrame, columns: Iterable[str], path: Path, limit: int,
                          validate: Callable[[dict[str, Any]], Any], label: Callable[[dict[str, Any]], str]) -> None:
     """Hold each distinct configuration of a figure's table (its ``columns``, at most ``limit`` of

@@ -121,11 +121,22 @@ def parquet_rows(path: str | os.PathLike, kind: str = "table", limit: int = MAX_
         raise DataError(f"{kind} {str(path)!r} is not a readable parquet file ({brief(e)})") from None
 
 
+class ColumnType:
+    """A test of a column's arrow type (``test(type)``) and what it accepts, in ``words``
+    ("an integer"): messages say the words, not the test's function name."""
+
+    def __init__(self, words: str, test: Callable[[Any], bool]) -> None:
+        self.words, self.test = words, test
+
+    def __call__(self, arrow_type) -> bool:
+        return self.test(arrow_type)
+
+
 def check_columns(schema, columns: Mapping[str, Any], path: str | os.PathLike, kind: str = "table",
                   exact: bool = False) -> None:
     """Refuse (DataError naming the file and the first column at fault) a parquet ``schema`` (of
-    the file ``path``) that lacks one of ``columns`` (name -> pyarrow DataType, or a predicate
-    such as ``pyarrow.types.is_integer``) or holds one of another type; with ``exact``, also
+    the file ``path``) that lacks one of ``columns`` (name -> pyarrow DataType, a :class:`ColumnType`,
+    or a predicate such as ``pyarrow.types.is_integer``) or holds one of another type; with ``exact``, also
     one holding a column not in ``columns``."""
     import pyarrow as pa
 
@@ -137,8 +148,9 @@ def check_columns(schema, columns: Mapping[str, Any], path: str | os.PathLike, k
         actual = schema.field(index).type
         ok = actual == expected if isinstance(expected, pa.DataType) else expected(actual)
         if not ok:
-            raise DataError(f"{kind} {str(path)!r}: column {name!r} is {actual}, "
-                            f"not {expected if isinstance(expected, pa.DataType) else expected.__name__}")
+            wanted = (expected if isinstance(expected, pa.DataType)
+                      else expected.words if isinstance(expected, ColumnType) else expected.__name__)
+            raise DataError(f"{kind} {str(path)!r}: column {name!r} is {actual}, not {wanted}")
     extra = [name for name in schema.names if name not in columns] if exact else []
     if extra or len(schema.names) != len(set(schema.names)):
         shown = extra[0] if extra else next(n for n in schema.names if schema.names.count(n) > 1)

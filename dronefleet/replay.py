@@ -39,6 +39,10 @@ DATASET_PAGES = sweeps.PAGES_FOLDER
 SHOWN_VALUES = 20
 
 TEMPLATE = "replay.html"  # in this package: the page around the data and the scene script
+#: The line of :data:`TEMPLATE`'s head that marks a page as dronefleet's: --out replaces only such a file.
+GENERATOR = '<meta name="generator" content="dronefleet replay">'
+#: Bytes of a file read to find :data:`GENERATOR` (the template's head; the data comes after it).
+PAGE_HEAD = 1024
 
 
 def _config_text(table_path: Path) -> bytes | None:
@@ -110,8 +114,9 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None 
     ``trial``, would make a page too large, or holds a
     table that is another run's, cannot be read or holds a value the page cannot draw (a
     DataError naming the file and column), or if ``out`` cannot be written (a folder, a special
-    file such as a named pipe or a device, a missing or read-only parent, a file in a run folder
-    other than ``run_dir``'s own ``replay.html``, ...).
+    file such as a named pipe or a device, a symbolic link, a file that is not a replay page
+    dronefleet wrote, a missing or read-only parent, a file in a run folder other than
+    ``run_dir``'s own ``replay.html``, ...).
     """
     run_dir, out = Path(run_dir), Path(out)
     scenario = scenario_of_run(run_dir)
@@ -125,12 +130,23 @@ def write(run_dir: str | os.PathLike, out: str | os.PathLike, trial: int | None 
         return write_atomic(out, lambda tmp: tmp.write_text(html, encoding="utf-8"))
 
 
+def is_page(path: Path) -> bool:
+    """Whether the file ``path`` is a replay page dronefleet wrote: its head holds :data:`GENERATOR`
+    (only the head is read: the file may be large, or not a page at all)."""
+    try:
+        with open(path, "rb") as file:
+            return GENERATOR.encode() in file.read(PAGE_HEAD)
+    except OSError:
+        return False
+
+
 def _check_out(out: Path, run_dir: Path) -> None:
     """Refuse (ConfigError, one line) a page file ``out`` that cannot be written or would spoil a
     run folder: only ``run_dir``'s own :data:`REPLAY_FILE` may go into one."""
     if out.is_dir():
         raise ConfigError(f"--out {str(out)!r} is a folder; give the page's file name, e.g. {out / REPLAY_FILE}")
-    check_output_file(out, "--out", "give the path of a file for the page")  # /dev/null stays a device
+    if out.is_symlink():  # the page's rename would replace the link; writing through it, another file
+        raise ConfigError(f"--out {str(out)!r} is a symbolic link; give the path of the page itself")
     if not out.parent.is_dir():
         raise ConfigError(f"--out {str(out)!r}: folder {str(out.parent)!r} does not exist")
     # in a run folder, any other file would overwrite a table, make the folder no longer a run,
@@ -140,6 +156,9 @@ def _check_out(out: Path, run_dir: Path) -> None:
                             for s in scenarios.loading().values()):
         raise ConfigError(f"--out {str(out)!r} lies in a run folder, where only that run's own page may go: "
                           f"give {str(run_dir / REPLAY_FILE)!r} or a file outside any run folder")
+    # only a page dronefleet wrote is replaced, never a user's file (/dev/null stays a device)
+    check_output_file(out, "--out", "give the path of another file for the page", replaceable=is_page,
+                      kind="a replay page that dronefleet wrote")
 
 
 def is_dataset(folder: str | os.PathLike) -> bool:

@@ -58,7 +58,7 @@ import pyarrow.parquet as pq
 from . import console, executors, scenarios
 from .config import ConfigError, shipped_config
 from .contract import FigureStudy, study_problems
-from .datafiles import DataError, checked_column, parquet_rows, parquet_schema, read_parquet
+from .datafiles import ColumnType, DataError, checked_column, parquet_rows, parquet_schema, read_parquet
 from .delivery import analysis
 from .outputs import probe_folders, writing
 from .replenishment import study as replenishment
@@ -243,17 +243,11 @@ def _read(study, figure, name):
     return _read_parquet(path, figure, name)
 
 
-def _is_text(arrow_type):
-    return pa.types.is_string(arrow_type) or pa.types.is_large_string(arrow_type)
-
-
-def _is_number(arrow_type):
-    return pa.types.is_integer(arrow_type) or pa.types.is_floating(arrow_type)
-
-
-def flat(arrow_type: pa.DataType) -> bool:
-    """Any column type but a nested one (a list, struct or map): every value compares as one value."""
-    return not pa.types.is_nested(arrow_type)
+_TEXT = ColumnType("text", lambda arrow_type: pa.types.is_string(arrow_type) or pa.types.is_large_string(arrow_type))
+_INTEGER = ColumnType("an integer", pa.types.is_integer)
+_NUMBER = ColumnType("a number", lambda arrow_type: pa.types.is_integer(arrow_type) or pa.types.is_floating(arrow_type))
+#: Any column type but a nested one (a list, struct or map): every value compares as one value.
+flat = ColumnType("one value a row (not a list, struct or map)", lambda arrow_type: not pa.types.is_nested(arrow_type))
 
 
 def _any(values):
@@ -263,14 +257,14 @@ def _any(values):
 #: What the drawings and --check rely on in a column of the figures' tables: (its arrow type,
 #: what each value must be, in words, and whether nulls are allowed).
 KINDS = {
-    "text": (_is_text, _any, "text", False),
-    "integer": (pa.types.is_integer, _any, "an integer", False),
-    "count": (pa.types.is_integer, lambda x: x >= 0, "an integer >= 0", False),
+    "text": (_TEXT, _any, "text", False),
+    "integer": (_INTEGER, _any, "an integer", False),
+    "count": (_INTEGER, lambda x: x >= 0, "an integer >= 0", False),
     # a week of a run: runs are at most 1000 weeks long (delivery's horizon_weeks)
-    "week": (pa.types.is_integer, lambda x: (x >= 0) & (x <= 1000), "an integer in [0, 1000]", False),
-    "key": (_is_number, np.isfinite, "a finite number", False),
-    "number": (_is_number, lambda x: ~np.isinf(x), "a number, NaN or null (not infinite)", True),
-    "flag": (pa.types.is_boolean, _any, "true or false", False),
+    "week": (_INTEGER, lambda x: (x >= 0) & (x <= 1000), "an integer in [0, 1000]", False),
+    "key": (_NUMBER, np.isfinite, "a finite number", False),
+    "number": (_NUMBER, lambda x: ~np.isinf(x), "a number, NaN or null (not infinite)", True),
+    "flag": (ColumnType("true or false", pa.types.is_boolean), _any, "true or false", False),
 }
 #: The columns each delivery figure table must hold, and their kinds (:data:`KINDS`); other columns
 #: are kept if they are not nested. ``runs`` is read by --check only. Other studies: their TABLE_COLUMNS.

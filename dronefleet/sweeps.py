@@ -104,6 +104,7 @@ import math
 import os
 import re
 import shlex
+import stat
 import sys
 import time
 import traceback
@@ -655,6 +656,22 @@ def damage(run: Run, out: Path) -> str | None:
     return None
 
 
+def _check_part_files(run: Run, out: Path) -> None:
+    """Refuse (SweepError, one line naming it) a folder where a file of ``run`` goes: the run's
+    write renames its file over it, which fails for a folder only (a special file or a link is
+    replaced, as a damaged part), so every run would be redone to fail the same way. The
+    user's folder is not removed."""
+    for table in run.scenario.tables:
+        path = run.path(out, table)
+        try:
+            folder = stat.S_ISDIR(os.lstat(path).st_mode)
+        except OSError:  # absent (or its folder is): the run writes it
+            continue
+        if folder:
+            raise SweepError(f"the dataset {out} is damaged: {str(path)!r}, the {table} file of run {run.partition}, "
+                             "is a folder, which the run cannot replace: move or remove it")
+
+
 def inspect(run: Run, out: Path) -> tuple[str, str | None]:
     """``(state, why)``: :func:`state`, with :func:`damage`'s line for a damaged run (else None)."""
     summary = run.path(out, "summary")
@@ -720,6 +737,16 @@ def _found_layout(out: Path, tables: tuple[str, ...]) -> tuple[tuple[str, ...], 
     return None
 
 
+def dataset_holding(path: str | os.PathLike) -> Path | None:
+    """The sweep dataset a folder ``path`` would lie in (the nearest folder above it holding a
+    :data:`LAYOUT_FILE`, or the summary partitions of a dataset written before that file), or
+    None: readers take a dataset's folders whole, so a run folder in one adds rows to it."""
+    for folder in Path(os.path.abspath(path)).parents:
+        if os.path.lexists(folder / LAYOUT_FILE) or _found_layout(folder, ("summary",)) is not None:
+            return folder
+    return None
+
+
 def _read_layout(record: Path, out: Path) -> tuple[tuple[str, ...], str | None]:
     """The partition keys and the scenario (None in a record written before it held one) of the
     layout file ``record``: ``{"keys": [names], "scenario": name}``, read as data (a regular file
@@ -767,8 +794,9 @@ def _found_scenario(out: Path, keys: tuple[str, ...]) -> str | None:
 
 def _check_owned(sweep: Sweep, out: Path) -> None:
     """Refuse a folder ``out`` that is not absent, empty, a dataset (its :data:`LAYOUT_FILE`, or the
-    partitions of one written before it) or a folder of only what dronefleet writes there (the
-    script and logs of ``sweep plan``): a sweep would write among the user's files and replace them."""
+    partitions of one written before it: its tables' folders hold nothing else) or a folder of only
+    what dronefleet writes there (the script and logs of ``sweep plan``): a sweep would write among
+    the user's files and replace them."""
     if not out.is_dir() or os.path.lexists(out / LAYOUT_FILE):
         return
     ours = {*sweep.scenario.tables, LAYOUT_FILE, COLLECTED_FILE, f"{sweep.name}.sbatch", *SIDE_FOLDERS}
@@ -781,6 +809,40 @@ def _check_owned(sweep: Sweep, out: Path) -> None:
         raise SweepError(f"{out} is not a sweep dataset and holds files dronefleet did not write "
                          f"({_shown(foreign[0], 40)}{more}), which a sweep could replace: give an absent or empty "
                          "folder, or a dataset dronefleet wrote (another --results or [sweep] name, or out=)")
+    stray = next(filter(None, (_not_a_part(out / table) for table in sweep.scenario.tables)), None)
+    if stray is not None:  # e.g. the user's own summary/ folder: a sweep would write among its files
+        raise SweepError(f"{out} is not a sweep dataset: its {_shown(os.path.relpath(stray, out), 80)} is not a "
+                         "run's part, and a table's "
+                         "folder holds only <key>=<value>/.../part-0.parquet: give an absent or empty folder, or a "
+                         "dataset dronefleet wrote (another --results or [sweep] name, or out=)")
+
+
+#: What a table's folder of a dataset holds: partition folders (``<key>=<value>``), then the
+#: runs' parts and the temporary files of their atomic writes (:func:`dronefleet.records.write_atomic`).
+_PARTITION_FOLDER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*=.*", re.S)
+_PART_FILE = re.compile(r"part-0\.parquet|\.part-0\.parquet\..*\.tmp", re.S)
+
+
+def _not_a_part(top: Path) -> str | None:
+    """The first path in the table's folder ``top`` of a dataset that a dataset does not hold
+    there (see :data:`_PARTITION_FOLDER`), or None (also if it is absent, or no folder)."""
+    if not top.is_dir():
+        return None
+    try:
+        for root, folders, files in os.walk(top, onerror=_raise):
+            for name in folders:
+                if not _PARTITION_FOLDER.fullmatch(name):
+                    return os.path.join(root, name)
+            for name in files:
+                if root == str(top) or not _PART_FILE.fullmatch(name):
+                    return os.path.join(root, name)
+    except OSError as error:
+        raise SweepError(f"cannot read the folder {top} ({error.strerror or error})") from None
+    return None
+
+
+def _raise(error: OSError) -> None:
+    raise error
 
 
 def check_layout(sweep: Sweep, out: Path) -> None:
@@ -968,6 +1030,7 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
     check_layout(sweep, out)
     todo = []
     for run in runs:
+        _check_part_files(run, out)
         found, problem = inspect(run, out)
         if found == "damaged":
             _report(f"{problem}: running {run.partition} again")

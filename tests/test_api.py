@@ -115,6 +115,12 @@ def test_save_refuses_a_run_folder_unless_overwrite(tmp_path):
         r.save(tmp_path / "run")
     r.save(tmp_path / "run", overwrite=True)
     assert set(files(tmp_path / "run")) == {f"{name}.parquet" for name in r.arrow}
+    # in a sweep's dataset the run would be read as rows of the sweep
+    (tmp_path / "d" / "summary").mkdir(parents=True)
+    (tmp_path / "d" / "_layout.json").write_text('{"keys": ["seed"], "scenario": "delivery"}')
+    with pytest.raises(OutputError, match="lies in the sweep dataset"):
+        r.save(tmp_path / "d" / "summary" / "seed=7")
+    assert list((tmp_path / "d" / "summary").iterdir()) == []
 
 
 def test_overrides_the_seed_and_set_reach_the_config():

@@ -653,6 +653,24 @@ def test_a_folder_of_the_users_files_is_never_a_sweeps_dataset(tmp_path, capsys,
         assert snapshot(tmp_path) == before
 
 
+@pytest.mark.parametrize("stray", ["summary/notes.txt", "orders/rule=random/notes.txt", "summary/rule=random/mine",
+                                   "summary/part-0.parquet"])
+def test_a_users_folder_named_as_a_table_is_never_a_sweeps_dataset(tmp_path, capsys, no_array, stray):
+    mine = tmp_path / "results" / "smoke"
+    # beside the user's file, the partitions of an older dataset (no _layout.json) do not make it one
+    (mine / "summary" / "rule=random" / "tau_minutes=15.0" / "seed=1").mkdir(parents=True)
+    (mine / "summary" / "rule=random" / "tau_minutes=15.0" / "seed=1" / "part-0.parquet").write_bytes(b"PAR1")
+    (mine / stray).parent.mkdir(parents=True, exist_ok=True)
+    (mine / stray).write_text("mine")
+    before = snapshot(tmp_path)
+    for command in ("run", "status", "collect"):
+        assert run_cli(["sweep", command, str(SMOKE), "--results", str(tmp_path / "results")]) == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err and len(err.splitlines()) == 1, err
+        assert f"{mine} is not a sweep dataset: its {stray!r} is not a run's part" in err, err
+        assert snapshot(tmp_path) == before
+
+
 def test_collect_never_replaces_a_summary_table_it_did_not_write(tiny_done, capsys):
     import pyarrow as pa
     import pyarrow.parquet as pq

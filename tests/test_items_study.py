@@ -184,6 +184,21 @@ def test_a_table_holding_a_configuration_the_model_refuses_is_one_line(quick_fig
     assert not list(d.glob("*.png"))
 
 
+@pytest.mark.parametrize("value", ["zz", "../x", "e2"])
+@pytest.mark.parametrize("command", ["--check", "--redraw"])
+def test_a_table_naming_an_experiment_not_the_figures_is_one_line(quick_fig04, tmp_path, capsys, value, command):
+    # the experiment names the sweep file --check runs again: never a path from the table
+    out, _ = quick_fig04
+    runs = pd.read_parquet(out / "quick" / "items-fig04" / "runs.parquet")
+    runs["experiment"] = value
+    d = tmp_path / "quick" / "items-fig04"
+    d.mkdir(parents=True)
+    runs.to_parquet(d / "runs.parquet")
+    assert cli.main(["reproduce", "items-fig04", "--quick", command, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"dronefleet: error: {d / 'runs.parquet'}: experiment {value!r} is not one of this figure's (e1)"]
+
+
 def test_redrawing_gives_the_same_bytes(quick_fig04):
     out, _ = quick_fig04
     d = out / "quick" / "items-fig04"

@@ -5,6 +5,7 @@ its tables, --check re-deriving them, and the figures in ``reproduce --list``.""
 
 import importlib
 import math
+import re
 import shutil
 import sys
 import types
@@ -288,6 +289,22 @@ def test_a_tampered_layout_is_refused_in_one_line_naming_the_file(synthetic_resu
     with pytest.raises(SweepError, match=f"{runs}: the configuration layout='MOON', .* world.layout = 'MOON' is not "
                                          "allowed"):
         study.draw(context, "lunar-fig07")
+
+
+@pytest.mark.parametrize("value", ["zz", "../x", "e0"])
+def test_a_table_naming_an_experiment_not_the_figures_is_refused_naming_it(synthetic_results, value):
+    # the experiment names the sweep file --check runs again: never a path from the table
+    from dronefleet.config import SweepError
+
+    context, _ = synthetic_results
+    runs = context.root / "lunar-fig07" / "runs.parquet"
+    table = pd.read_parquet(runs)
+    table.loc[0, "experiment"] = value
+    table.to_parquet(runs, index=False)
+    for call in (study.check, study.draw):
+        with pytest.raises(SweepError, match=re.escape(f"{runs}: experiment {value!r} is not one of this "
+                                                       "figure's (e1)")):
+            call(context, "lunar-fig07")
 
 
 def test_the_quick_mode_is_stated():

@@ -255,7 +255,7 @@ TAMPERED_CONTENTS = [
     ("attempts", first_set("return_soc", float("inf")), "column 'return_soc' holds inf at row 0"),
     ("attempts", without("outcome"), "has no column 'outcome'"),
     ("attempts", lambda t: with_column("takeoff_s", t["takeoff_s"].cast(pa.string()))(t),
-     "column 'takeoff_s' is string, not is_floating"),
+     "column 'takeoff_s' is string, not a float"),
     ("orders", first_set("order_id", 7), "column 'order_id' holds 7 at row 0; allowed: the row number"),
     ("orders", first_set("distance_m", -1.0), "column 'distance_m' holds -1.0 at row 0"),
     ("orders", without("distance_m"), "has no column 'distance_m'"),
@@ -471,3 +471,23 @@ def test_an_empty_battery_is_marked_visibly(replenishment_run, tmp_path):
         chromium(source, "t=40", [f"--screenshot={tmp_path / 'shot.png'}"], tmp_path / "profile")
         counts.append(_vermillion_pixels(tmp_path / "shot.png"))
     assert counts[0] >= 2 * 20 and counts[1] == 0, counts  # a mark of tens of pixels per empty robot, none else
+
+
+def test_out_replaces_only_a_page_dronefleet_wrote_never_a_users_file_nor_through_a_link(tmp_path, capsys,
+                                                                                           delivery_run):
+    mine, layout = tmp_path / "mine.html", tmp_path / "_layout.json"
+    mine.write_text("<html>my notes</html>")
+    layout.write_text('{"keys": ["seed"]}')
+    link = tmp_path / "link.html"
+    link.symlink_to(mine)
+    for out in (mine, layout):
+        _refused(capsys, ["replay", str(delivery_run), "--out", str(out)],
+                 f"--out {str(out)!r} exists and is not a replay page that dronefleet wrote, so it is not replaced")
+    _refused(capsys, ["replay", str(delivery_run), "--out", str(link)], "is a symbolic link")
+    assert mine.read_text() == "<html>my notes</html>" and layout.read_text() == '{"keys": ["seed"]}'
+    assert link.is_symlink()
+    page = tmp_path / "page.html"  # a page dronefleet wrote is replaced
+    assert cli.main(["replay", str(delivery_run), "--out", str(page)]) == 0
+    assert cli.main(["replay", str(delivery_run), "--out", str(page)]) == 0
+    assert replay.is_page(page) and embedded(page) == embedded(delivery_run / REPLAY_FILE)
+    capsys.readouterr()

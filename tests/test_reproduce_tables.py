@@ -38,6 +38,11 @@ def as_text(name):
     return lambda table: table.set_column(table.schema.get_field_index(name), name, table[name].cast(pa.string()))
 
 
+def numbered(name):
+    """A change of a table: column ``name`` replaced by the row numbers."""
+    return lambda table: table.set_column(table.schema.get_field_index(name), name, pa.array(range(table.num_rows)))
+
+
 def without(name):
     return lambda table: table.drop_columns([name])
 
@@ -57,7 +62,10 @@ def refused(argv, capsys, *fragments):
 
 REDRAWN = [
     ("fig16", "outcomes", without("rule"), "has no column 'rule'"),
-    ("fig16", "outcomes", as_text("tau_minutes"), "column 'tau_minutes' is string, not _is_number"),
+    # the kind a column must be, in words
+    ("fig16", "outcomes", as_text("tau_minutes"), "column 'tau_minutes' is string, not a number"),
+    ("fig16", "outcomes", numbered("rule"), "column 'rule' is int64, not text"),
+    ("fig19", "thresholds", as_text("best"), "column 'best' is string, not true or false"),
     ("fig16", "outcomes", set_first("delivered", None), "column 'delivered' holds null at row 0"),
     ("fig16", "outcomes", set_first("tau_minutes", float("nan")), "column 'tau_minutes' holds nan at row 0"),
     ("fig16", "backlog", set_first("rule", None), "column 'rule' holds null at row 0; allowed: text"),
@@ -67,7 +75,7 @@ REDRAWN = [
     ("fig18", "winner_soh", set_first("soc", float("nan")), "column 'soc' holds nan at row 0"),
     ("fig18", "winner_soh", without("mass_kg"), "has no column 'mass_kg'"),
     ("fig19", "thresholds", set_first("best", None), "column 'best' holds null at row 0"),
-    ("fig19", "thresholds", as_text("runs"), "column 'runs' is string"),
+    ("fig19", "thresholds", as_text("runs"), "column 'runs' is string, not an integer"),
     ("fig20", "pending", set_first("pending", -1), "column 'pending' holds -1 at row 0; allowed: an integer >= 0"),
     ("fig20", "pending", without("arrival_week"), "has no column 'arrival_week'"),
     ("fig10", "runs", set_first("strategy", None), "column 'strategy' holds null at row 0"),
@@ -86,7 +94,7 @@ REDRAWN = [
     ("fig09", "runs", set_first("n_chargers", 10**9), "n_chargers = 1000000000"),
     ("fig12", "bounds", set_first("transfer_loss", 2.0), "transfer_loss = 2.0"),
     # a column of the simulator's summary the figure's statistics are derived from
-    ("lunar-fig07", "runs", as_text("trips"), "column 'trips' is string, not is_integer"),
+    ("lunar-fig07", "runs", as_text("trips"), "column 'trips' is string, not an integer"),
     ("lunar-control", "runs", as_text("deaths_per_session"), "column 'deaths_per_session' is string"),
 ]
 
@@ -123,7 +131,7 @@ def no_run(*args, **kwargs):
 @pytest.mark.parametrize("change, fragment", [
     (without("run"), "has no column 'run'"),
     (set_first("sweep", None), "column 'sweep' holds null at row 0"),
-    (lambda table: table.append_column("extra", pa.array([[1]] * table.num_rows)), "column 'extra' is list<"),
+    (lambda table: table.append_column("extra", pa.array([[1]] * table.num_rows)), "not one value a row (not a list, struct or map)"),
 ])
 def test_check_refuses_a_delivery_runs_table_it_cannot_compare_before_any_run(change, fragment, tmp_path, capsys,
                                                                              monkeypatch):

@@ -112,7 +112,22 @@ def _save_fleet_fifo(root):
     os.mkfifo(root / "fleet.parquet")
 
 
+def _sweep_dataset(root):
+    (root / "d" / "summary" / "rule=random" / "seed=1").mkdir(parents=True)
+    (root / "d" / "_layout.json").write_text('{"keys": ["rule", "seed"], "scenario": "delivery"}')
+
+
+def _older_dataset(root):  # written before datasets had a layout file: its partitions tell
+    (root / "d" / "summary" / "rule=random" / "seed=1").mkdir(parents=True)
+    (root / "d" / "summary" / "rule=random" / "seed=1" / "part-0.parquet").write_bytes(b"PAR1")
+
+
 HOSTILE = [  # (what is already there, run arguments, message fragment)
+    # readers take a dataset's folders whole: a run among them would be rows of the sweep
+    (_sweep_dataset, ["--out", "{root}/d/summary/rule=greedy"], "lies in the sweep dataset '{root}/d'"),
+    (_sweep_dataset, ["--out", "{root}/d/notes/run"], "lies in the sweep dataset '{root}/d'"),
+    (_older_dataset, ["--out", "{root}/d/summary/rule=greedy/seed=1"], "lies in the sweep dataset '{root}/d'"),
+    (_older_dataset, ["--out", "{root}/d/timeseries/rule=greedy"], "lies in the sweep dataset '{root}/d'"),
     (_file, ["--out", "{root}/a-file"], "is a file; it must be a folder"),
     (_file, ["--out", "{root}/a-file/run"], "Not a directory"),
     (_file, ["--out", "{root}/run", "--save-fleet", "{root}/a-file/fleet.parquet"], "Not a directory"),

@@ -189,15 +189,19 @@ def test_a_summary_of_another_number_of_rows_than_its_runs_replicates_is_damage(
     assert pq.read_metadata(part).num_rows == 1
 
 
-def test_a_part_that_cannot_be_replaced_fails_its_run_and_the_others_go_on(copy, capsys):
+@pytest.mark.parametrize("table", ["summary", "orders"])
+def test_a_folder_where_a_part_goes_is_refused_in_one_line_before_any_run_writes(copy, capsys, table):
     path, results, s, out = copy
-    part = s.runs[0].path(out, "orders")
+    part = s.runs[0].path(out, table)
     folder(part)
+    (part / "mine.txt").write_text("the user's")
     shutil.rmtree(s.runs[1].path(out, "summary").parent)   # a run to do beside it
-    assert run_cli(["sweep", "run", str(path), "--results", str(results), "--jobs", "1"]) == 1
-    captured = capsys.readouterr()
-    assert "Traceback" not in captured.err and "ran 2, skipped 2 done before, 1 failed" in captured.out
-    assert sw.state(s.runs[1], out) == "done"
+    before = snapshot(results)
+    assert run_cli(["sweep", "run", str(path), "--results", str(results), "--jobs", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert f"{str(part)!r}, the {table} file of run {s.runs[0].partition}, is a folder" in err
+    assert snapshot(results) == before   # no run written, the folder kept
     assert run_cli(["sweep", "status", str(path), "--results", str(results)]) == 1
     assert f"damaged  {s.runs[0].partition}: part {str(part)!r} is not a regular file" in capsys.readouterr().out
 

@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..config import ConfigError
-from ..datafiles import checked_column, parquet_rows, read_parquet
+from ..datafiles import ColumnType, checked_column, parquet_rows, read_parquet
 from .config import SECONDS_PER_WEEK, Config, describe
 
 __all__ = ["replay_data", "check_replayable", "GOLDEN_ANGLE", "MAX_FLIGHTS", "MAX_ORDERS", "MAX_SAMPLES"]
@@ -57,7 +57,8 @@ def _checked_tables(run_dir: Path, config: Config):
     import pandas as pd
 
     horizon, n_uavs = config.horizon_s, config.n_uavs
-    integer, floating, text = pa.types.is_integer, pa.types.is_floating, pa.types.is_string
+    integer, floating = ColumnType("an integer", pa.types.is_integer), ColumnType("a float", pa.types.is_floating)
+    text = ColumnType("text", pa.types.is_string)
     in_run = f"finite, in [0, {horizon:g}] s"
     soc = "finite, in [0, 100] %"
     farthest = config.distance_max_m * (1 + 1e-9)

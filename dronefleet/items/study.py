@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import SweepError
-from ..contract import StudyContext, check_configurations
+from ..contract import StudyContext, check_configurations, check_experiments
 from . import experiments
 from .experiments import CONFIG_COLUMNS, RESULT_COLUMNS, USES
 from .params import Params
@@ -230,10 +230,12 @@ MAX_CONFIGURATIONS = 10_000
 
 
 def read_runs(study: StudyContext, figure: str) -> pd.DataFrame:
-    """The figure's ``runs`` table, its columns checked (``study.read_table``) and each of its
-    configurations held to a config file's rules, so that a tampered table is one line naming
-    the file and the configuration before anything is drawn or run."""
+    """The figure's ``runs`` table, its columns checked (``study.read_table``), its experiments
+    the figure's (:data:`SOURCES`) and each of its configurations held to a config file's rules,
+    so that a tampered table is one line naming the file and the configuration before anything
+    is drawn or run."""
     runs = study.read_table(figure, "runs")
+    check_experiments(runs, study.root / figure / "runs.parquet", SOURCES[figure])
     check_configurations(
         runs, CONFIG_COLUMNS, study.root / figure / "runs.parquet", MAX_CONFIGURATIONS,
         lambda values: Params(**{k: v.item() if hasattr(v, "item") else v for k, v in values.items()}).validate(),

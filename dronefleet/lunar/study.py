@@ -32,7 +32,7 @@ import pandas as pd
 import pyarrow as pa
 
 from ..config import SweepError
-from ..contract import StudyContext, check_configurations
+from ..contract import StudyContext, check_configurations, check_experiments
 from . import experiments
 from .experiments import CURVE_METRICS, TRIP_METRICS
 from .simulate import table_schemas
@@ -255,13 +255,17 @@ MAX_CONDITIONS = 100
 
 
 def read_tables(study: StudyContext, figure: str, names) -> dict[str, pd.DataFrame]:
-    """The figure's tables ``names``, their columns checked (``study.read_table``), and the
+    """The figure's tables ``names``, their columns checked (``study.read_table``), their
+    experiments the figure's (:data:`SOURCES`; E0's figures: ``e0``), and the
     configuration values of each condition (layout, battery, ...) held to a config file's rules,
     so that a tampered table is one line naming the file and the value before anything is drawn or run."""
     from .keys import KEYS, checked
 
     tables = {name: study.read_table(figure, name) for name in names}
     for name, table in tables.items():
+        if "experiment" in table.columns:
+            check_experiments(table, study.root / figure / f"{name}.parquet",
+                              ("e0",) if figure in E0_FIGURES else SOURCES[figure])
         keys = [column for column in _CONDITION if column in KEYS and column in table.columns]
         if keys:
             check_configurations(table, keys, study.root / figure / f"{name}.parquet", MAX_CONDITIONS, checked,

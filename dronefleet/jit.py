@@ -177,7 +177,10 @@ def borrowing(function=None, **options):
     28-31 % of the paper run (docs/guide/benchmarks.md). numba compiles its own hot string helpers
     the same way (``_nrt=False``). Such a kernel must not allocate: numba then refuses it when
     compiling. The functions it calls inherit the setting; one that allocates (a sort) must be
-    compiled with ``_nrt=True`` said explicitly (see ``delivery.engine._sort``).
+    compiled with ``_nrt=True`` said explicitly (see ``delivery.engine._sort``). And none of them
+    may return an array: numba keeps one compiled version of a function per signature, so one
+    compiled for a borrowing kernel also serves ordinary compiled code, which would release the
+    returned array once too often (``tests/test_jit.py``).
     """
     return njit(function, cache=True, _nrt=False, **options)
 

@@ -156,3 +156,54 @@ def test_with_no_writable_cache_folder_the_private_one_is_removed_at_exit(tmp_pa
             "assert root.is_dir() and root.name.startswith('dronefleet-kernels-')")
     root = Path(_python(tmp_path, code)[0])
     assert not root.exists()
+
+
+_BORROWED_RETURNS = """
+import importlib, pkgutil
+from numba.core import types
+from numba.core.dispatcher import Dispatcher
+import dronefleet
+from dronefleet import api
+
+api.run("lunar", set={"runs": 1, "n_robots": 10, "duration_s": 60.0})
+api.run("delivery", set={"horizon_weeks": 1})
+
+def holds_array(t):
+    return isinstance(t, types.Array) or (isinstance(t, types.BaseTuple) and any(map(holds_array, t.types)))
+
+for module in pkgutil.walk_packages(dronefleet.__path__, "dronefleet."):
+    for name, value in vars(importlib.import_module(module.name)).items():
+        if isinstance(value, Dispatcher) and value.__module__ == module.name:
+            for compiled in value.overloads.values():
+                if not compiled.target_context.enable_nrt and holds_array(compiled.signature.return_type):
+                    print(f"{module.name}.{name} -> {compiled.signature.return_type}")
+"""
+
+
+def test_the_scenarios_with_borrowing_kernels_are_the_ones_checked_below():
+    lenders = {path.resolve() for path, _ in _modules() if "@borrowing" in path.read_text(encoding="utf-8")}
+    scenarios = set()
+    for path, name in _kernel_modules():
+        closure, pending = set(), [path.resolve()]
+        while pending:
+            module = pending.pop()
+            if module not in closure:
+                closure.add(module)
+                pending.extend(jit._imports(module))
+        if closure & lenders and name.count(".") == 2:  # dronefleet.<scenario>.<module>
+            scenarios.add(name.split(".")[1])
+    assert scenarios == {"delivery", "lunar"}  # a new one: add a run of it to _BORROWED_RETURNS
+
+
+def test_no_kernel_compiled_without_reference_counts_returns_an_array(tmp_path):
+    # A function called from a `borrowing` kernel is compiled without reference counts too (numba
+    # passes the setting on), and numba keeps one compiled version per signature, whoever called
+    # first: called later from ordinary compiled code, an array it returns is a reference that
+    # caller releases once too often (freed memory, then a crash in a later allocation). The
+    # flags are known only for kernels compiled in this process: an empty cache folder.
+    env = {**{key: value for key, value in os.environ.items() if key != "PYTHONPATH"},
+           "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    done = subprocess.run([sys.executable, "-c", _BORROWED_RETURNS], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout == ""

@@ -344,21 +344,21 @@ def trip_state(n=2):
 
 def test_trip_record_from_leaving_one_region_to_entering_another():
     last_left, voided, tick_left, role_left, acc, trips = trip_state()
-    trips, used = k.region_change(1, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
-                                  trips, 0, 7)
+    used = k.region_change(1, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
+                           trips, 0, 7)
     acc[1] += (5.0, 300.0, 0.9)                      # driven, used, of which in the soft patch
-    trips, used = k.region_change(1, 90, k.NO_REGION, k.REG_T, k.F_OUT, last_left, voided, tick_left, role_left, acc,
-                                  trips, used, 7)
+    used = k.region_change(1, 90, k.NO_REGION, k.REG_T, k.F_OUT, last_left, voided, tick_left, role_left, acc,
+                           trips, used, 7)
     assert used == 1
     row = trips[0]
     assert (row[k.TR_RUN], row[k.TR_ORIGIN], row[k.TR_DEST], row[k.TR_TICK_LEFT], row[k.TR_TICK_ENTERED]) == \
         (7, k.REG_N, k.REG_T, 10, 90)
     assert (row[k.TR_LENGTH], row[k.TR_ENERGY], row[k.TR_SOFT], row[k.TR_ROBOT]) == (5.0, 300.0, 0.9, 1)
     # coming back into the region it left is not a trip
-    trips, used = k.region_change(1, 95, k.REG_T, k.NO_REGION, k.F_IN, last_left, voided, tick_left, role_left, acc,
-                                  trips, used, 7)
-    trips, used = k.region_change(1, 99, k.NO_REGION, k.REG_T, k.F_IN, last_left, voided, tick_left, role_left, acc,
-                                  trips, used, 7)
+    used = k.region_change(1, 95, k.REG_T, k.NO_REGION, k.F_IN, last_left, voided, tick_left, role_left, acc,
+                           trips, used, 7)
+    used = k.region_change(1, 99, k.NO_REGION, k.REG_T, k.F_IN, last_left, voided, tick_left, role_left, acc,
+                           trips, used, 7)
     assert used == 1
 
 
@@ -373,14 +373,14 @@ def beacon_spell(robot, n=2):
 def test_a_beacon_spell_voids_the_trip_in_progress():
     last_left, voided, tick_left, role_left, acc, trips = trip_state()
     countdown, omega, bvx, bvy, bsoc, binit, weight, ikey = beacon_spell(0)
-    trips, used = k.region_change(0, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
-                                  trips, 0, 0)
+    used = k.region_change(0, 10, k.REG_N, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
+                           trips, 0, 0)
     k.become_beacon(0, 156, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
     assert countdown[0] == 156
     assert not omega[0].any() and not binit[0].any() and (ikey[0] == -1).all() and omega[1].all()
     # ... decays later and drives on into T: no N -> T trip spanning the beacon spell
-    trips, used = k.region_change(0, 900, k.NO_REGION, k.REG_T, k.F_OUT, last_left, voided, tick_left, role_left, acc,
-                                  trips, used, 0)
+    used = k.region_change(0, 900, k.NO_REGION, k.REG_T, k.F_OUT, last_left, voided, tick_left, role_left, acc,
+                           trips, used, 0)
     assert used == 0
 
 
@@ -390,15 +390,15 @@ def test_a_beacon_spell_inside_a_region_leaves_no_region_to_start_a_trip_from():
     last_left, voided, tick_left, role_left, acc, trips = trip_state()
     countdown, omega, bvx, bvy, bsoc, binit, weight, ikey = beacon_spell(0)
     k.become_beacon(0, 156, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
-    trips, used = k.region_change(0, 900, k.REG_T, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
-                                  trips, 0, 0)
-    trips, used = k.region_change(0, 990, k.NO_REGION, k.REG_R, k.R, last_left, voided, tick_left, role_left, acc,
-                                  trips, used, 0)
+    used = k.region_change(0, 900, k.REG_T, k.NO_REGION, k.F_OUT, last_left, voided, tick_left, role_left, acc,
+                           trips, 0, 0)
+    used = k.region_change(0, 990, k.NO_REGION, k.REG_R, k.R, last_left, voided, tick_left, role_left, acc,
+                           trips, used, 0)
     assert used == 0
-    trips, used = k.region_change(0, 995, k.REG_R, k.NO_REGION, k.R, last_left, voided, tick_left, role_left, acc,
-                                  trips, used, 0)
-    trips, used = k.region_change(0, 999, k.NO_REGION, k.REG_T, k.F_IN, last_left, voided, tick_left, role_left, acc,
-                                  trips, used, 0)
+    used = k.region_change(0, 995, k.REG_R, k.NO_REGION, k.R, last_left, voided, tick_left, role_left, acc,
+                           trips, used, 0)
+    used = k.region_change(0, 999, k.NO_REGION, k.REG_T, k.F_IN, last_left, voided, tick_left, role_left, acc,
+                           trips, used, 0)
     assert used == 1 and (trips[0, k.TR_ORIGIN], trips[0, k.TR_TICK_LEFT]) == (k.REG_R, 995)
 
 

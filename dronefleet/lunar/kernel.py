@@ -391,7 +391,9 @@ def region_change(i, k, old, new, role, last_left, voided, tick_left, role_left,
     leaving a region starts a trip (``acc[i]`` = length, energy, soft length reset) unless a beacon
     spell ``voided[i]`` it, entering a region Y other than the last one left appends a trip record
     (and ends the voiding) to ``trips``, which has room for it (the kernel makes room for a trip per
-    robot before each tick: no allocation in its tick loop). Returns (trips, n_trips)."""
+    robot before each tick: no allocation in its tick loop). Returns the new n_trips, never the
+    array: compiled without reference counts (inside ``run_ticks``), a returned array would be a
+    reference its caller releases once too often."""
     if old != NO_REGION and not voided[i]:
         last_left[i] = old
         tick_left[i] = k
@@ -416,7 +418,7 @@ def region_change(i, k, old, new, role, last_left, voided, tick_left, role_left,
             n_trips += 1
         last_left[i] = NO_REGION
         voided[i] = False
-    return trips, n_trips
+    return n_trips
 
 
 @njit(cache=True)
@@ -944,8 +946,8 @@ def bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, 
             visited_r[i] = True
         old = reg[i]
         if old != newreg:
-            trips, n_trips = region_change(i, k, old, newreg, role[i], last_left, voided, tick_left, role_left,
-                                           acc, trips, n_trips, run_id)
+            n_trips = region_change(i, k, old, newreg, role[i], last_left, voided, tick_left, role_left,
+                                    acc, trips, n_trips, run_id)
             if newreg != NO_REGION:
                 if newreg == REG_T and t_first[0] < 0:
                     t_first[0] = k

@@ -131,6 +131,19 @@ def test_a_run_too_large_for_a_page_is_refused_before_the_run(tmp_path, capsys, 
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.parametrize("frames", ["true", "false"])
+def test_a_run_shorter_than_a_frame_interval_is_drawn_from_its_end_snapshot(tmp_path, frames):
+    # 5 s is 78 ticks, n_T is 156: the run records no frame, only its end
+    run = tmp_path / "run"
+    assert cli.main(["run", "lunar", "--set", "runs=1", "--set", "n_robots=3", "--set", "duration_s=5",
+                     "--set", f"frames={frames}", "--out", str(run), "--replay"]) == 0
+    config = scenario.read_config(run / "summary.parquet")
+    assert config.ticks < config.n_T
+    data = embedded(run / REPLAY_FILE)
+    assert data["times"] == [pytest.approx(config.ticks * config.tau)] and len(data["x"]) == 3
+    assert data == json.loads(json.dumps(scenario.replay_data(run)))
+
+
 @needs_chromium
 def test_the_page_plays_in_chromium_and_ends_at_the_runs_totals(runs, tmp_path):
     run = runs["hard"]

@@ -109,6 +109,16 @@ def test_a_summary_the_run_does_not_give_is_refused_in_one_line(runs, tmp_path, 
     assert not out.exists()
 
 
+def test_a_config_whose_occlusion_tests_exceed_the_limit_is_refused_before_it_is_simulated(runs, tmp_path, capsys):
+    def occluding(config):   # 500 robots for 600 s with bodies occluding: minutes of simulation
+        config["robots"]["n_robots"], config["run"]["duration_s"] = 500, 600.0
+        config["options"]["los_bodies"] = True
+        return config
+    tampered, out = _tamper(runs["plain"], tmp_path, config=occluding), tmp_path / "page.html"
+    assert "at most 6e+11" in _refused(capsys, ["replay", str(tampered), "--out", str(out)], "occlusion-tests")
+    assert not out.exists()
+
+
 def test_frames_that_are_not_whole_are_refused_in_one_line(runs, tmp_path, capsys):
     copy = tmp_path / "cut"
     copy.mkdir()

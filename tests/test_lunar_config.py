@@ -176,6 +176,11 @@ def test_hostile_set_values_are_refused_in_one_line_and_nothing_is_written(tmp_p
     (["runs=147"], ("could hold up to", "trip-rows", "1,364 trips a robot can make", "3.3 m between regions")),
     (["v0=20", "r_body=1", "tau=0.05", "runs=10"], ("trip-rows", "lower runs, n_robots, duration_s or v0")),
     (["runs=146"], ()),
+    # each link tested against every body: 500 robots for 600 s would take minutes (~1.2e12)
+    (["runs=1", "n_robots=500", "duration_s=600", "los_bodies=true"],
+     ("occlusion-tests", "runs 1 x 9,375 ticks x 500^3", "at most 6e+11", "set los_bodies = false")),
+    (["runs=1", "n_robots=500", "duration_s=600"], ()),
+    (["los_bodies=true"], ()),  # E4's runs
 ])
 def test_runs_too_large_or_undefined_are_refused_before_any_work(overrides, fragments):
     if not fragments:
@@ -188,15 +193,17 @@ def test_runs_too_large_or_undefined_are_refused_before_any_work(overrides, frag
 
 def test_the_limits_hold_the_documented_numbers():
     size = lunar.run_size(SCENARIO.load(None))
-    assert size == {"robot_ticks": 50 * 56_250 * 50, "pair_ticks": 50 * 56_250 * 50**2, "records": 50 * 361,
+    assert size == {"robot_ticks": 50 * 56_250 * 50, "pair_ticks": 50 * 56_250 * 50**2, "occlusion_tests": 0,
+                    "records": 50 * 361,
                     "snapshot_rows": 50 * 50 * 16, "trip_rows": 50 * 50 * (4500 // 3.3 + 1)}
-    assert lunar.RUN_LIMITS == {"robot_ticks": 2e9, "pair_ticks": 1e11, "records": 5e6, "snapshot_rows": 1e6,
-                                "trip_rows": 1e7}
+    assert lunar.RUN_LIMITS == {"robot_ticks": 2e9, "pair_ticks": 1e11, "occlusion_tests": 6e11, "records": 5e6,
+                                "snapshot_rows": 1e6, "trip_rows": 1e7}
+    assert lunar.run_size(SCENARIO.load(None, ["los_bodies=true"]))["occlusion_tests"] == 50 * 56_250 * 50**3
     assert math.isclose(region_gap(SCENARIO.load(None)), 6.3 - 3.0)  # R-T, the closest regions
     assert math.isclose(region_gap(SCENARIO.load(None, ["layout_scale=1"])), 8.4 - 3.0)
     assert lunar.run_size(SCENARIO.load(None, ["frames=true"]))["snapshot_rows"] == 942_500
     text = LUNAR.read_text()
-    assert "<= 2e9" in text and "<= 1e11" in text and "<= 5e6" in text and "<= 1e6" in text and "<= 1e7" in text
+    assert "<= 2e9" in text and "<= 1e11" in text and "<= 5e6" in text and "<= 1e6" in text and "<= 1e7" in text and "<= 6e11" in text
 
 
 @pytest.mark.parametrize("text, fragments", [

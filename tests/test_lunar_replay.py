@@ -109,6 +109,16 @@ def test_a_summary_the_run_does_not_give_is_refused_in_one_line(runs, tmp_path, 
     assert not out.exists()
 
 
+def test_a_config_whose_occlusion_tests_exceed_the_limit_is_refused_before_it_is_simulated(runs, tmp_path, capsys):
+    def occluding(config):   # 500 robots for 600 s with bodies occluding: minutes of simulation
+        config["robots"]["n_robots"], config["run"]["duration_s"] = 500, 600.0
+        config["options"]["los_bodies"] = True
+        return config
+    tampered, out = _tamper(runs["plain"], tmp_path, config=occluding), tmp_path / "page.html"
+    assert "at most 6e+11" in _refused(capsys, ["replay", str(tampered), "--out", str(out)], "occlusion-tests")
+    assert not out.exists()
+
+
 def test_frames_that_are_not_whole_are_refused_in_one_line(runs, tmp_path, capsys):
     copy = tmp_path / "cut"
     copy.mkdir()
@@ -129,6 +139,19 @@ def test_a_run_too_large_for_a_page_is_refused_before_the_run(tmp_path, capsys, 
                       "--replay"],
              "--replay: a replay page of 4 frames x 50 robots x 11 values = 2,200 values is too large; at most 1,000")
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("frames", ["true", "false"])
+def test_a_run_shorter_than_a_frame_interval_is_drawn_from_its_end_snapshot(tmp_path, frames):
+    # 5 s is 78 ticks, n_T is 156: the run records no frame, only its end
+    run = tmp_path / "run"
+    assert cli.main(["run", "lunar", "--set", "runs=1", "--set", "n_robots=3", "--set", "duration_s=5",
+                     "--set", f"frames={frames}", "--out", str(run), "--replay"]) == 0
+    config = scenario.read_config(run / "summary.parquet")
+    assert config.ticks < config.n_T
+    data = embedded(run / REPLAY_FILE)
+    assert data["times"] == [pytest.approx(config.ticks * config.tau)] and len(data["x"]) == 3
+    assert data == json.loads(json.dumps(scenario.replay_data(run)))
 
 
 @needs_chromium

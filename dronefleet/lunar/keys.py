@@ -115,12 +115,16 @@ KEYS: dict[str, Key] = {
 #: Limits on a run's work and memory, checked before any work (:func:`run_size`). ``robot_ticks``:
 #: runs x ticks x robots (motion, energy, roles: the defaults make 1.4e8); ``pair_ticks``: runs x
 #: ticks x robots^2 (sensing and communication between robots: 7e9 at the defaults);
+#: ``occlusion_tests``: with ``los_bodies``, runs x ticks x robots^3 (each link's line of sight
+#: tested against every other robot's body; 0 without): 500 robots all in range test ~8e9 a
+#: second, so the limit is about a minute (E4's los_bodies runs make 3.5e11);
 #: ``records``: rows of the time series (runs x (ticks / n_T + 1)); ``snapshot_rows``: rows of the
 #: snapshots table (runs x robots x snapshots per run; the defaults with ``frames = true`` make
 #: 9.4e5, about 250 MB while built); ``trip_rows``: the most trip records the runs can hold, each
 #: robot driving the shortest gap between two regions for every trip (runs x robots x (v0 T_run /
 #: gap + 1); 3.4e6 at the defaults, ~400 MB, where a run of 50 records a few hundred per run).
-RUN_LIMITS = {"robot_ticks": 2e9, "pair_ticks": 1e11, "records": 5e6, "snapshot_rows": 1e6, "trip_rows": 1e7}
+RUN_LIMITS = {"robot_ticks": 2e9, "pair_ticks": 1e11, "occlusion_tests": 6e11, "records": 5e6, "snapshot_rows": 1e6,
+              "trip_rows": 1e7}
 #: Milestone snapshots of a run besides the periodic ones: first_T, first_R, first_row5, end.
 MILESTONES = 4
 
@@ -189,6 +193,7 @@ def run_size(params: LunarParams) -> dict[str, float]:
     """The work and memory of a run as :data:`RUN_LIMITS` counts them."""
     run_ticks = params.runs * params.ticks
     return {"robot_ticks": run_ticks * params.n_robots, "pair_ticks": run_ticks * params.n_robots ** 2,
+            "occlusion_tests": run_ticks * params.n_robots ** 3 if params.los_bodies else 0,
             "records": params.runs * (params.ticks // params.n_T + 1),
             "snapshot_rows": params.runs * params.n_robots * snapshots_per_run(params),
             "trip_rows": params.runs * params.n_robots * trips_per_robot(params)}
@@ -197,6 +202,8 @@ def run_size(params: LunarParams) -> dict[str, float]:
 #: Each limit of :data:`RUN_LIMITS`: the keys it depends on, and what brings it down.
 _LIMIT_FIXES = {"robot_ticks": (("runs", "duration_s", "tau", "n_robots"), "lower runs, duration_s or n_robots"),
                 "pair_ticks": (("runs", "duration_s", "tau", "n_robots"), "lower runs, duration_s or n_robots"),
+                "occlusion_tests": (("runs", "duration_s", "tau", "n_robots", "los_bodies"),
+                                    "lower runs, duration_s or n_robots, or set los_bodies = false"),
                 "records": (("runs", "duration_s", "tau", "update_interval_s"),
                             "lower runs or duration_s, or raise update_interval_s"),
                 "snapshot_rows": (("runs", "n_robots", "snapshot_every_s", "frames"),
@@ -209,6 +216,7 @@ def _factors(p: LunarParams) -> dict[str, str]:
     """What each of :data:`RUN_LIMITS` counts, in ``p``'s numbers."""
     return {"robot_ticks": f"runs {p.runs} x {p.ticks:,} ticks x {p.n_robots} robots",
             "pair_ticks": f"runs {p.runs} x {p.ticks:,} ticks x {p.n_robots}^2 robot pairs",
+            "occlusion_tests": f"runs {p.runs} x {p.ticks:,} ticks x {p.n_robots}^3 (links x bodies, los_bodies)",
             "records": f"runs {p.runs} x {p.ticks // p.n_T + 1:,} records per run",
             "snapshot_rows": f"runs {p.runs} x {p.n_robots} robots x {snapshots_per_run(p):,} snapshots per run",
             "trip_rows": f"runs {p.runs} x {p.n_robots} robots x {trips_per_robot(p):,} trips a robot can make, "

@@ -92,7 +92,7 @@ def _tables(run_dir: Path, config, run: int) -> dict:
 
     snapshots = _read(run_dir, "snapshots", run)
     if config.frames:
-        return {"timeseries": _read(run_dir, "timeseries", run), "frames": snapshots[snapshots["label"] == "frame"]}
+        return {"timeseries": _read(run_dir, "timeseries", run), "frames": _page_frames(snapshots, config)}
     from .simulate import simulate
 
     fresh = {name: table.to_pandas() for name, table in
@@ -102,8 +102,14 @@ def _tables(run_dir: Path, config, run: int) -> dict:
         raise DataError(f"table {str(run_dir / 'summary.parquet')!r}: run {run} simulated again from its config "
                         "gives another summary: a table of another run or dronefleet version; write the run again "
                         "with dronefleet run")
-    snapshots = fresh["snapshots"]
-    return {"timeseries": fresh["timeseries"], "frames": snapshots[snapshots["label"] == "frame"]}
+    return {"timeseries": fresh["timeseries"], "frames": _page_frames(fresh["snapshots"], config)}
+
+
+def _page_frames(snapshots, config):
+    """The snapshots the page draws: the frames, or the end snapshot of a run shorter than n_T
+    (ticks count from 1, so such a run records no frame)."""
+    label = "frame" if config.ticks >= config.n_T else "end"
+    return snapshots[snapshots["label"] == label]
 
 
 def replay_data(run_dir: Path, config: Any, description: str, run: int) -> dict[str, Any]:

@@ -427,8 +427,11 @@ def ticks(s, first, n_trips):
                        s.f_hist, s.nb_hist, s.series, s.align, s.align_w, s.trips, n_trips, s.snaps, 0)
 
 
-def test_the_tick_loop_stops_before_a_tick_without_room_for_a_trip_per_robot():
+def test_the_tick_loop_stops_before_a_tick_without_room_for_a_trip_or_a_row_2_trigger_per_robot():
     s = state(2, duration_s=0.64)
     assert ticks(s, 3, 1) == (3, 0, 1, 0) and s.status[0] == k.UNSPAWNED    # 1 + 2 robots > 2 rows
+    s.n_triggers[0] = 1
+    assert ticks(s, 3, 0) == (3, 0, 0, 0) and s.status[0] == k.UNSPAWNED    # the same for the triggers
+    s.n_triggers[0] = 0
     end = ticks(s, 3, 0)                                   # ticks 3 .. K; the end snapshot (a row per robot)
     assert (end[0], end[2], end[3]) == (s.opts[k.O_TICKS] + 1, 0, 2) and s.status[0] == k.ALIVE

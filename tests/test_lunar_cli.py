@@ -1,4 +1,4 @@
-"""``dronefleet run lunar``: the four tables with the contract's columns (LUNAR-CONTRACT.md, spec
+"""``dronefleet run lunar``: the tables with the contract's columns (LUNAR-CONTRACT.md, spec
 sections 12 and 19), the printed summary, run folders complete or absent, and a run that is
 refused before any work. Tiny runs (6 robots, 60 s, 2 runs) take seconds once the kernel is
 compiled. (Ctrl-C in a lunar run: tests/test_interrupt.py, with the other scenarios.)"""
@@ -42,6 +42,16 @@ COLUMNS = {
                   ("role", "string"), ("mode", "string"), ("x", "double"), ("y", "double"), ("heading", "double"),
                   ("soc", "double"), ("load", "int64"),
                   *((f"{name}_{key}", "double") for name in ("omega", "vx", "vy", "S") for key in "TNR")],
+    "robots": [("run", "int64"), ("robot", "int64"), ("trips", "int64"),
+               *((name, "double") for name in ("distance_m", "energy_j", "energy_wh")),
+               *((name, "int64") for name in ("recharges", "loads", "unloads")),
+               *((f"time_{role}_s", "double") for role in ("f_out", "f_in", "r", "b")), ("died", "bool")],
+    "deaths": [("run", "int64"), ("robot", "int64"), ("t", "double"), ("x", "double"), ("y", "double"),
+               ("role", "string"), ("mode", "string"), ("region", "string")],
+    "recharge_triggers": [("run", "int64"), ("robot", "int64"), ("t", "double"), ("role", "string"),
+                          *((name, "double") for name in ("soc", "s_hat_dest", "s_hat_R", "x", "y", "dist_R_m"))],
+    "beacon_costs": [("run", "int64"), ("label", "string"), ("t", "double"), ("near", "string"), ("beacons", "int64"),
+                     ("S_R_mean", "double"), ("S_T_mean", "double")],
 }
 
 
@@ -63,12 +73,12 @@ def tiny_run(tmp_path_factory):
 
 def test_the_table_schemas_are_the_contracts():
     schemas = SCENARIO.table_schemas()
-    assert tuple(schemas) == SCENARIO.tables == ("summary", "timeseries", "trips", "snapshots")
+    assert tuple(schemas) == SCENARIO.tables == tuple(COLUMNS)
     for table, columns in COLUMNS.items():
         assert [(f.name, str(f.type)) for f in schemas[table]] == columns, table
 
 
-def test_a_run_writes_the_four_tables_with_the_contracts_columns(tiny_run):
+def test_a_run_writes_the_tables_with_the_contracts_columns(tiny_run):
     assert sorted(p.name for p in tiny_run.iterdir()) == sorted(f"{t}.parquet" for t in COLUMNS)
     config = SCENARIO.load(None, [s for s in TINY if s != "--set"])
     for table, columns in COLUMNS.items():

@@ -32,18 +32,30 @@ RUNS = {
 
 EXPECTED = {
     "hard_nt_options": {
+        "beacon_costs": "0aa631d8e3429cabc4a125d1b67974044552bbbf5531a086aab2609c1004abe8",
+        "deaths": "47ff0b1b7e8562d15b6cf9d43dcc01e9014ca4b103cae885e8997177e900a70d",
+        "recharge_triggers": "944b874b3e4aef94de958cf1e555b7a9bd461a06da60ebf631eb89159c506c7b",
+        "robots": "5b4a3f550b3097403acc8bfd676b618a5e11218b2c17b79716672f1d2f1c0174",
         "snapshots": "e95451615b763bad65d0ded2e0bf0048d43fcc50abac5fb22fa8ed32d073fb1d",
         "summary": "08679c0642ddfd80fce31bc91a450998683d05608e4f6b51147c21c8f4dadd98",
         "timeseries": "83c2cd6cf1605b0a9883a740cf38cdef84610552022cd3bcf518b7fa853b12f7",
         "trips": "d639a308c01c7c338b03af1c8177ac2eac6b4389312031740f3319dc2a848e16",
     },
     "open_options": {
+        "beacon_costs": "c81e7b78ed2a32e36e1984c96d2c0877f5ad891c39c36026a8fee58aef2d4be1",
+        "deaths": "80ad4b9e6fad9ec727eacfde99496dea55215e00545537df684cf42a5d6d6831",
+        "recharge_triggers": "bfa889435f369ca4d41b5f3b9a6f1e3ffb441b43dddc198f08d185ec989c6a0a",
+        "robots": "eeeebb2a31a73abc3f8273488cbed38b4eb377021908ae132eb382e6fa898b2d",
         "snapshots": "a04ace463f1dbbf49deccb3eb8b210e144f48310fe873d0fc2a51e08ea91170e",
         "summary": "69179544948fb6f0ac36ce25816ce73695345a5338c7889094b209e6ca84a281",
         "timeseries": "49583f56102cafb626e25a247ce72e7d36075752d40a86e221a4bb701265a52b",
         "trips": "433eddbaf52bd5ae733239f0f1776f5bb6ae89f79d00c39a0f68fa3382469308",
     },
     "soft_rt": {
+        "beacon_costs": "14a9129254c4f8f4a006e54465ae9fec328c9db26af83d7cc2f6e1905cddfa94",
+        "deaths": "80ad4b9e6fad9ec727eacfde99496dea55215e00545537df684cf42a5d6d6831",
+        "recharge_triggers": "bfa889435f369ca4d41b5f3b9a6f1e3ffb441b43dddc198f08d185ec989c6a0a",
+        "robots": "553e26cdf1a7ccb5ef9290542b42951b0d4745f668c9d65c09276a91669368bf",
         "snapshots": "7e1523c784425a78e111832725c07a2f0c4db619d17f542d699cb56f9b5825a0",
         "summary": "1c020d3e8d2781c1821bc711ede2af4e2ae4ff7301c9ac463160f544ff066cf4",
         "timeseries": "0134e657c6e5c93dbd57d3940091855d1baf62b81bfbd0c65885ee94884bc4a9",
@@ -88,8 +100,9 @@ def test_same_config_and_seed_give_the_same_bytes():
 
 
 def test_run_alone_equals_the_same_run_in_a_batch():
-    batch = simulate(LunarParams(n_robots=25, duration_s=240.0, runs=3, seed=2))
-    alone = simulate(LunarParams(n_robots=25, duration_s=240.0, runs=1, first_run=2, seed=2))
+    # a 1-Wh battery: run 2 has deaths and row-2 triggers too, so that every table has rows to compare
+    batch = simulate(LunarParams(n_robots=25, duration_s=240.0, runs=3, seed=2, battery_wh=1.0))
+    alone = simulate(LunarParams(n_robots=25, duration_s=240.0, runs=1, first_run=2, seed=2, battery_wh=1.0))
     for table, t in alone.items():
         rows = batch[table].filter(batch[table]["run"].to_numpy() == 2)
         assert rows.num_rows == t.num_rows and rows.num_rows > 0, table

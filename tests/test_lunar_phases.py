@@ -75,7 +75,10 @@ def state(n, **changes):
     s.inbox = (s.ikey, s.idelta, s.ivx, s.ivy, s.iu)
     s.sensed = (s.sx, s.sy, s.d2, s.nb_cnt, s.nb_list, s.mb_cnt, s.beacons, s.links, s.s_hat, s.no_r_guidance,
                 s.nearest)
-    s.trip = (s.last_left, s.voided, s.tick_left, s.role_left, s.acc)
+    s.ledger = np.zeros((n, k.N_LEDGER))
+    s.ledger[:, k.LG_DIED_K] = -1.0
+    s.triggers, s.n_triggers = np.empty((n, k.N_TRIGGER)), np.zeros(1, dtype=np.int64)
+    s.trip = (s.last_left, s.voided, s.tick_left, s.role_left, s.acc, s.ledger, s.triggers, s.n_triggers)
     return s
 
 
@@ -178,6 +181,32 @@ def test_a_robot_without_beacons_outside_n_becomes_a_beacon_by_row_1():
 # ------------------------------------------------------------------ step 4: heading decisions (7.1, 7.3)
 
 
+def test_row_2_records_the_soc_the_costs_it_compared_with_and_where_the_robot_was():
+    s = state(2)
+    put(s, 0, *FREE, role=k.F_OUT, soc=0.2)
+    put(s, 1, FREE[0] + 1.0, FREE[1], role=k.F_IN, soc=0.5)
+    s.sx[:], s.sy[:] = s.x, s.y
+    s.nb_cnt[:] = 1
+    s.s_hat[0] = (0.1, 0.0, 0.25)                  # SOC 0.2 < S_hat^R = 0.25: row 2
+    s.s_hat[1] = (0.3, 0.4, 0.45)                  # SOC 0.5 above both: no row 2
+    roles(s, tick=40)
+    assert (s.role[0], s.role[1], s.row_counts[1], s.n_triggers[0]) == (k.R, k.F_IN, 1, 1)
+    soc = s.energy[0] / s.pars[k.P_ECAP]
+    assert list(s.triggers[0, k.TG_ROBOT:]) == [0, 40, k.F_OUT, soc, 0.1, 0.25, FREE[0], FREE[1]]
+
+
+def test_the_ledger_counts_each_robots_unloads_loads_and_charging_sessions():
+    s = state(3)
+    put(s, 0, *N_C, role=k.F_IN)
+    s.load[0] = 3
+    put(s, 1, *T_C, role=k.F_OUT)
+    put(s, 2, *R_C, role=k.R)
+    roles(s)
+    assert (s.mode[2], s.row_counts[3]) == (k.CHARGING, 1)
+    counts = s.ledger[:, [k.LG_UNLOADS, k.LG_LOADS, k.LG_RECHARGES]]
+    assert counts.tolist() == [[1, 0, 0], [0, 1, 0], [0, 0, 1]] and s.n_triggers[0] == 0
+
+
 def decide(s):
     k.heading_decisions(s.opts, s.pars, s.rng, s.n, s.status, s.role, s.mode, s.n_failed, s.bt_budget, s.bt_travel,
                         s.immediate, s.countdown, s.search, s.s_c, s.visited_r, s.decided, s.heading, s.memory,
@@ -245,6 +274,7 @@ def test_translation_steps_v0_tau_and_stops_at_a_wall_until_the_blocked_turn():
     translate(s)
     assert (s.x[0], s.y[0], s.moved[0], s.acc[0, 0]) == (FREE[0] + step, FREE[1], True, step)
     assert (s.x[1], s.moved[1], s.blocked[1]) == (wall_x - r_body - step / 2, False, s.opts[k.O_BLOCKED] - 1)
+    assert list(s.ledger[:, k.LG_MOVES]) == [1.0, 0.0]          # the ticks each robot moved (section 19)
     (u,) = draws(s, 1, 1)
     translate(s)
     assert s.x[1] == wall_x - r_body - step / 2 and s.blocked[1] == 0
@@ -284,6 +314,28 @@ def test_energy_drains_by_p_out_tau_gains_p_solar_in_r_and_dies_at_zero():
     assert s.energy[1] == 0.5 * e_cap + (p[k.P_SOLAR] - p[k.P_COMP]) * tau
     assert list(s.here) == [k.NO_REGION, k.REG_R, k.REG_T]
     assert (s.status[2], s.sup[2, 0], s.tally[k.TL_DEATHS]) == (k.DEAD, k.S_DEAD, 1)
+
+
+def energy(s):
+    k.energy_and_deaths(s.pars, s.g, s.table, s.n, s.sup, s.status, s.role, s.x, s.y, s.here, s.loaded_now, s.energy,
+                        s.motion, s.sensed, s.trip, s.tally)
+
+
+def test_energy_adds_each_robots_energy_and_tick_in_its_role_to_its_ledger_and_the_tick_it_died():
+    s = state(2)
+    put(s, 0, *FREE, role=k.F_IN, soc=0.5)
+    s.moved[0] = True
+    put(s, 1, *T_C, beacon_was=k.R, soc=0.0)
+    s.energy[1] = 1e-9
+    s.tally[k.TL_TICK] = 57
+    energy(s)
+    used = s.acc[0, 1]
+    s.tally[k.TL_TICK] = 58
+    energy(s)
+    ticks_0, ticks_1 = (list(s.ledger[i, k.LG_TICKS:k.LG_TICKS + 4]) for i in (0, 1))
+    assert ticks_0 == [0.0, 2.0, 0.0, 0.0] and ticks_1 == [0.0, 0.0, 0.0, 1.0]   # F_OUT, F_IN, R, B
+    assert s.ledger[0, k.LG_ENERGY] == s.acc[0, 1] and s.acc[0, 1] > used > 0.0   # the trip's, from the same ticks
+    assert (s.status[1], s.ledger[1, k.LG_DIED_K], s.ledger[0, k.LG_DIED_K]) == (k.DEAD, 57.0, -1.0)
 
 
 # ------------------------------------------------------------------ step 7: bookkeeping, trips (sections 10, 12)
@@ -375,8 +427,11 @@ def ticks(s, first, n_trips):
                        s.f_hist, s.nb_hist, s.series, s.align, s.align_w, s.trips, n_trips, s.snaps, 0)
 
 
-def test_the_tick_loop_stops_before_a_tick_without_room_for_a_trip_per_robot():
+def test_the_tick_loop_stops_before_a_tick_without_room_for_a_trip_or_a_row_2_trigger_per_robot():
     s = state(2, duration_s=0.64)
     assert ticks(s, 3, 1) == (3, 0, 1, 0) and s.status[0] == k.UNSPAWNED    # 1 + 2 robots > 2 rows
+    s.n_triggers[0] = 1
+    assert ticks(s, 3, 0) == (3, 0, 0, 0) and s.status[0] == k.UNSPAWNED    # the same for the triggers
+    s.n_triggers[0] = 0
     end = ticks(s, 3, 0)                                   # ticks 3 .. K; the end snapshot (a row per robot)
     assert (end[0], end[2], end[3]) == (s.opts[k.O_TICKS] + 1, 0, 2) and s.status[0] == k.ALIVE

@@ -70,16 +70,21 @@ def unspawned():
     return row
 
 
-def run(robots, ticks=1, n_t=156, **changes):
+def outputs(robots, ticks=1, n_t=156, **changes):
     """Run ``ticks`` ticks from the rows ``robots`` (layout SOFT-RT unless changed; ``changes``:
-    LunarParams fields): (state after (robots, N_STATE), summary row (N_SUMMARY,))."""
+    LunarParams fields): (state after (robots, N_STATE), the kernel's outputs (``run_runs``))."""
     params = LunarParams(**{"n_robots": len(robots), **changes})
     opts, pars, geometry = kernel_inputs(params)
     opts[k.O_TICKS], opts[k.O_NT] = ticks, n_t
     state = np.array(robots, dtype=np.float64)
-    summary = k.run_runs(opts, pars, geometry, np.array([SEED]), np.array([0]), role_table()[0], state,
-                         np.zeros(1, np.int8))[0]
-    return state, summary[0]
+    return state, k.run_runs(opts, pars, geometry, np.array([SEED]), np.array([0]), role_table()[0], state,
+                             np.zeros(1, np.int8))
+
+
+def run(robots, ticks=1, n_t=156, **changes):
+    """:func:`outputs`' (state after, summary row (N_SUMMARY,))."""
+    state, out = outputs(robots, ticks, n_t, **changes)
+    return state, out[0][0]
 
 
 def draws(robot, count):
@@ -468,3 +473,33 @@ def test_alignment_weighted_by_omega():
     _, summary = run(robots)
     assert summary[k.SM_ALIGN + k.REG_T] == pytest.approx(0.0, abs=1e-12)
     assert summary[k.SM_ALIGN_W + k.REG_T] == pytest.approx(0.5)
+
+
+# ------------------------------------------------------------------ what a run records per robot (section 19)
+
+
+def test_a_robot_at_soc_near_0_dies_where_it_stands_and_its_record_says_where_and_as_what():
+    robots = [beacon(*T_C, was=k.R, energy=1e-9),                 # a beacon in T: it does not move
+              mobile(*FREE, role=k.R, heading=0.0, soc=1e-12),     # steps once, then dies
+              mobile(*N_C, role=k.F_IN, soc=0.5, countdown=100)]
+    after, out = outputs(robots, ticks=3)
+    ledger = out[4]
+    assert [row[k.LG_DIED_K] for row in ledger] == [1.0, 1.0, -1.0]
+    dead = ledger[:2, [k.LG_DIED_X, k.LG_DIED_Y, k.LG_DIED_ROLE, k.LG_DIED_MODE, k.LG_DIED_REGION]]
+    assert dead.tolist() == [[T_C[0], T_C[1], k.B, k.NORMAL, k.REG_T],
+                             [FREE[0] + STEP, FREE[1], k.R, k.NORMAL, k.NO_REGION]]
+    assert (after[1, k.ST_X], after[1, k.ST_STATUS]) == (FREE[0] + STEP, k.DEAD)
+    assert [row[k.LG_TICKS + k.B] + row[k.LG_TICKS + k.R] for row in ledger[:2]] == [1.0, 1.0]   # alive 1 tick
+
+
+def test_a_robot_alive_throughout_spends_the_run_in_its_roles_and_moves_every_tick():
+    ticks = 20                            # 1.6 m east of FREE, the beacon within 2 m all along (no row 1)
+    robots = [mobile(*FREE, role=k.F_OUT, heading=0.0, soc=0.5), beacon(FREE[0] + 0.8, FREE[1] + 1.0)]
+    after, out = outputs(robots, ticks=ticks)
+    robot, lit = out[4]
+    assert robot[k.LG_TICKS:k.LG_TICKS + 4].tolist() == [ticks, 0, 0, 0]
+    assert lit[k.LG_TICKS:k.LG_TICKS + 4].tolist() == [0, 0, 0, ticks]
+    assert (robot[k.LG_MOVES], lit[k.LG_MOVES]) == (ticks, 0)
+    assert after[0, k.ST_X] - FREE[0] == pytest.approx(ticks * STEP)
+    assert robot[k.LG_ENERGY] == pytest.approx(0.5 * E_CAP - after[0, k.ST_ENERGY])   # no solar outside R
+    assert [robot[k.LG_RUN], robot[k.LG_ROBOT], lit[k.LG_ROBOT]] == [0, 0, 1]

@@ -133,10 +133,21 @@ LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL
 #: The most snapshots one tick can take per robot: one per label, LABEL_FRAME being the last (the
 #: tick loop has no bounds checks: run_runs makes room for this many before each tick).
 SNAPS_PER_TICK = LABEL_FRAME + 1
-# A run's tallies (``tally``, int64): units deposited, unloads, deaths, and the milestone labels
-# reached this tick (a bit per label).
-TL_RESOURCES, TL_UNLOADS, TL_DEATHS, TL_MILESTONES = range(4)
-N_TALLY = 4
+# A run's tallies (``tally``, int64): units deposited, unloads, deaths, the milestone labels
+# reached this tick (a bit per label), and the tick.
+TL_RESOURCES, TL_UNLOADS, TL_DEATHS, TL_MILESTONES, TL_TICK = range(5)
+N_TALLY = 5
+# A robot's record of a run (``ledger``, a row per robot, float64; section 19): its run and id (set at
+# the run's end), ticks it moved, gross energy used [J], charging sessions (row 4), loads, unloads,
+# ticks alive in each role (F_OUT, F_IN, R, B: LG_TICKS + role), and its death: the tick (-1: none),
+# then, written at the run's end (no phase touches a dead robot), where it lies, its role, mode and region.
+(LG_RUN, LG_ROBOT, LG_MOVES, LG_ENERGY, LG_RECHARGES, LG_LOADS, LG_UNLOADS, LG_TICKS, LG_DIED_K, LG_DIED_X,
+ LG_DIED_Y, LG_DIED_ROLE, LG_DIED_MODE, LG_DIED_REGION) = (0, 1, 2, 3, 4, 5, 6, 7, 11, 12, 13, 14, 15, 16)
+N_LEDGER = 17
+# Columns of a row-2 trigger record (A42): the robot's SOC, the S_hat of its key and of R it compared
+# with, and where it was (the section-5 snapshot); the run is set at the run's end.
+TG_RUN, TG_ROBOT, TG_K, TG_ROLE, TG_SOC, TG_S_HAT_DEST, TG_S_HAT_R, TG_X, TG_Y = range(9)
+N_TRIGGER = 9
 # Columns of a robot's state in ``run_runs(..., start)`` (a hand-built start, read back at the end).
 (ST_STATUS, ST_SUP, ST_MODE, ST_X, ST_Y, ST_THETA_A, ST_THETA, ST_ENERGY, ST_LOAD, ST_S_C, ST_SOC_REF,
  ST_VISITED_R, ST_N_FAILED, ST_COUNTDOWN, ST_ROLE_K1, ST_ROLE_K2, ST_BLOCKED, ST_BT_BUDGET, ST_BT_TRAVEL,
@@ -640,13 +651,14 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
     region, fires the first row of section 9 whose guard holds (through the role supervisor
     ``table``; row 1 makes it a beacon), loads on rows 10 and 11 and turns on the rows of 7.2.
     Counts the rows in ``row_counts``, the units and unloads in ``tally`` and the first row 5 in
-    ``t_first[2]``."""
+    ``t_first[2]``; each robot's unloads, loads and charging sessions in its ``ledger`` row, and each
+    row 2 as a trigger record (``triggers``, which has room for one per robot)."""
     theta_a, theta, pcx, pcy, _, _ = heading
     blocked, avoiding, _, _, _ = motion
     omega, bvx, bvy, bsoc, binit, weight = memory
     ikey = inbox[0]
-    nb_cnt, s_hat, no_r_guidance = sensed[3], sensed[8], sensed[9]
-    last_left, voided = trip[0], trip[1]
+    sx, sy, nb_cnt, s_hat, no_r_guidance = sensed[0], sensed[1], sensed[3], sensed[8], sensed[9]
+    last_left, voided, ledger, triggers, n_triggers = trip[0], trip[1], trip[5], trip[6], trip[7]
     n_t = opts[O_NT]
     r_max = opts[O_RMAX]
     completion_last = opts[O_COMPLETION_LAST] != 0
@@ -661,6 +673,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
         if rg == REG_N and load[i] > 0 and take(table, sup, i, EV_UNLOAD):
             tally[TL_RESOURCES] += load[i]
             tally[TL_UNLOADS] += 1
+            ledger[i, LG_UNLOADS] += 1.0
             load[i] = 0
         if completion_last:
             if rg != NO_REGION:
@@ -685,6 +698,19 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
             blocked[i] = 0
             immediate[i] = False
             search[i] = False
+        elif row == 2:
+            rec = triggers[n_triggers[0]]
+            n_triggers[0] += 1
+            rec[TG_ROBOT] = i
+            rec[TG_K] = k
+            rec[TG_ROLE] = r0
+            rec[TG_SOC] = energy[i] / e_cap
+            rec[TG_S_HAT_DEST] = s_hat[i, r0]
+            rec[TG_S_HAT_R] = s_hat[i, R]
+            rec[TG_X] = sx[i]
+            rec[TG_Y] = sy[i]
+        elif row == 4:
+            ledger[i, LG_RECHARGES] += 1.0
         elif row == 5 and t_first[2] < 0:
             t_first[2] = k
             tally[TL_MILESTONES] |= 1 << LABEL_FIRST_ROW5
@@ -695,6 +721,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
         if (row == 10 or row == 11) and take(table, sup, i, EV_LOAD):
             load[i] = r_max
             loaded_now[i] = True
+            ledger[i, LG_LOADS] += 1.0
         # 7.2 (A26): turn on the role changes inside a region (rows 3, 5-11); "any": row 2 too
         if (row == 3 or row >= 5 or (row == 2 and turn_any)) and take(table, sup, i, EV_TURN_AROUND):
             theta_a[i] = wrap(theta[i] + PI)
@@ -838,12 +865,12 @@ def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, imme
     """Step 5, second half (7.5): in ascending id, each robot about to translate steps v0 tau along
     (``mdx``, ``mdy``) unless the disc there leaves the field, overlaps the hard obstacle or a
     body at its position already updated this tick (A29); ``blocked_limit`` blocked ticks in a row
-    give a new random plan. Accumulates the trip's length (soft part, with kappa) and the
-    RECONNECT and BACKTRACK distances (their ends: NORMAL, an immediate decision)."""
+    give a new random plan. Accumulates the trip's length (soft part, with kappa), the ticks moved
+    (``ledger``) and the RECONNECT and BACKTRACK distances (their ends: NORMAL, an immediate decision)."""
     theta_a, theta, pcx, pcy, mdx, mdy = heading
     blocked, _, _, moved, kappa = motion
     d2 = sensed[2]
-    acc = trip[4]
+    acc, ledger = trip[4], trip[5]
     blocked_limit = opts[O_BLOCKED]
     r_body = pars[P_RBODY]
     step = pars[P_V0] * pars[P_TAU]
@@ -887,6 +914,7 @@ def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, imme
             moved[i] = True
             blocked[i] = 0
             acc[i, 0] += step
+            ledger[i, LG_MOVES] += 1.0
             if mode[i] == RECONNECT:
                 rc_travel[i] += step
                 if rc_travel[i] >= d_rc:
@@ -912,10 +940,11 @@ def energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, lo
                       tally):
     """Step 6 (section 8): each alive robot's energy by :func:`tick_energy` (solar input where its
     centre is in R after the move, ``here``: its region now), the gross energy added to its trip,
-    and death at E = 0 (row X), counted in ``tally``."""
+    and death at E = 0 (row X), counted in ``tally``; in the robot's ``ledger`` row its energy, the
+    tick in its role and the tick it died."""
     _, avoiding, _, moved, kappa = motion
     links = sensed[7]
-    acc = trip[4]
+    acc, ledger = trip[4], trip[5]
     for i in range(spawned):
         if status[i] != ALIVE:
             continue
@@ -923,9 +952,12 @@ def energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, lo
         energy[i], used = tick_energy(energy[i], pars, here[i] == REG_R, role[i] != B, links[i], moved[i], kappa[i],
                                       avoiding[i], loaded_now[i])
         acc[i, 1] += used
+        ledger[i, LG_ENERGY] += used
+        ledger[i, LG_TICKS + role[i]] += 1.0
         if energy[i] == 0.0 and take(table, sup, i, EV_DEPLETED):
             status[i] = DEAD
             tally[TL_DEATHS] += 1
+            ledger[i, LG_DIED_K] = tally[TL_TICK]
 
 
 @njit(cache=True, inline='always')
@@ -934,7 +966,7 @@ def bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, 
     """Step 7 (sections 10, 12): for each robot alive after step 6, SOC_ref inside region(s_c),
     visited_R, and the region it entered or left (``here`` against ``reg``): trip records, the
     first entries into T and R. Returns n_trips (``trips`` has room for a trip per robot)."""
-    last_left, voided, tick_left, role_left, acc = trip
+    last_left, voided, tick_left, role_left, acc = trip[0], trip[1], trip[2], trip[3], trip[4]
     e_cap = pars[P_ECAP]
     for i in range(spawned):
         if status[i] != ALIVE:
@@ -1102,15 +1134,18 @@ def run_ticks(opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, f
     """Ticks ``first``, ``first`` + 1, ... K of run ``run`` (section 11: a call of each phase per tick, in
     order) over the arrays :func:`run_runs` allocated, until the end, Ctrl-C (``stop``) or a tick that
     might not find room for its trips (a row per robot) or snapshots (SNAPS_PER_TICK per robot) in
-    ``trips`` and ``snaps``. Returns (next tick, robots spawned, n_trips, n_snaps); run_runs makes room and calls
+    ``trips``, ``snaps`` and the row-2 triggers (a row per robot; ``trip[6]``, its rows used ``trip[7][0]``).
+    Returns (next tick, robots spawned, n_trips, n_snaps); run_runs makes room and calls
     again. Compiled without reference counts (it borrows every array and allocates nothing), with
     every phase inlined: a tick costs what the single loop it was cost."""
     n = opts[O_ROBOTS]
     n_ticks = opts[O_TICKS]
     for k in range(first, n_ticks + 1):
-        if stop[0] != 0 or n_trips + n > trips.shape[0] or n_snaps + SNAPS_PER_TICK * n > snaps.shape[0]:
+        if stop[0] != 0 or n_trips + n > trips.shape[0] or n_snaps + SNAPS_PER_TICK * n > snaps.shape[0] or \
+                trip[7][0] + n > trip[6].shape[0]:
             return k, spawned, n_trips, n_snaps
         tally[TL_MILESTONES] = 0
+        tally[TL_TICK] = k
         spawned, new = spawn(opts, pars, g, spawned, status, x, y, energy, search)
         sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
                               decided, immediate, heading, memory, sensed, inbox)
@@ -1161,7 +1196,8 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     Returns
     -------
     summary (n_runs, N_SUMMARY), series (n_runs, K // n_T, N_SERIES), trips (rows, N_TRIP),
-    snapshots (rows, N_SNAP), all float64 (integers stored exactly).
+    snapshots (rows, N_SNAP), robots (n_runs * robots, N_LEDGER: each robot's record of each run),
+    row-2 triggers (rows, N_TRIGGER), all float64 (integers stored exactly).
     """
     n = opts[O_ROBOTS]
     n_ticks = opts[O_TICKS]
@@ -1193,6 +1229,10 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     n_trips = 0
     snaps = np.empty((max(1, n) * 16, N_SNAP))
     n_snaps = 0
+    robots = np.full((n_runs * n, N_LEDGER), np.nan)
+    ledger = np.zeros((n, N_LEDGER))
+    triggers = np.empty((max(1, n) * 16, N_TRIGGER))
+    n_triggers = np.zeros(1, dtype=np.int64)
 
     rng = np.empty((1, n, 4), dtype=np.uint64)
     sup = np.zeros((n, 1), dtype=np.int64)
@@ -1268,13 +1308,14 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     tally = np.zeros(N_TALLY, dtype=np.int64)
     counts = np.zeros(8, dtype=np.int64)      # scratch of the time-series records
     # the phases' groups of arrays (section 11): the plan and motion heading, the avoidance and
-    # blocked state, the beacon memory and inbox, what step 2 sensed, the trip in progress
+    # blocked state, the beacon memory and inbox, what step 2 sensed, the trip in progress (with each
+    # robot's record of the run and the row-2 triggers: what section 19 records per robot and event)
     heading = (theta_a, theta, pcx, pcy, mdx, mdy)
     motion = (blocked, avoiding, was_avoiding, moved, kappa)
     memory = (omega, bvx, bvy, bsoc, binit, weight)
     inbox = (ikey, idelta, ivx, ivy, iu)
     sensed = (sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest)
-    trip = (last_left, voided, tick_left, role_left, acc)
+    trip = (last_left, voided, tick_left, role_left, acc, ledger, triggers, n_triggers)
 
     for run in range(n_runs):
         if stop[0] != 0:
@@ -1315,6 +1356,9 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         bt_travel[:] = 0.0
         rc_travel[:] = 0.0
         acc[:] = 0.0
+        ledger[:] = 0.0
+        ledger[:, LG_DIED_K] = -1.0
+        run_triggers = n_triggers[0]
         omega[:] = 0.0
         bvx[:] = 0.0
         bvy[:] = 0.0
@@ -1374,6 +1418,8 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         while k <= n_ticks and stop[0] == 0:
             trips = _room(trips, n_trips, n)
             snaps = _room(snaps, n_snaps, SNAPS_PER_TICK * n)
+            triggers = _room(triggers, n_triggers[0], n)
+            trip = (last_left, voided, tick_left, role_left, acc, ledger, triggers, n_triggers)
             k, spawned, n_trips, n_snaps = run_ticks(
                 opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, k, spawned, status, sup, role, mode,
                 role_k1, role_k2, x, y, energy, load, s_c, soc_ref, visited_r, n_failed, bt_budget, bt_travel,
@@ -1414,6 +1460,20 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
                     st[ST_VY + q] = bvy[i, q]
                     st[ST_S + q] = bsoc[i, q]
                     st[ST_INIT + q] = binit[i, q]
+
+        for r in range(run_triggers, n_triggers[0]):
+            triggers[r, TG_RUN] = run_id
+        for i in range(n):
+            row = robots[run * n + i]
+            row[:] = ledger[i]
+            row[LG_RUN] = run_id
+            row[LG_ROBOT] = i
+            if ledger[i, LG_DIED_K] >= 0.0:       # a dead robot lies as it died
+                row[LG_DIED_X] = x[i]
+                row[LG_DIED_Y] = y[i]
+                row[LG_DIED_ROLE] = role[i]
+                row[LG_DIED_MODE] = mode[i]
+                row[LG_DIED_REGION] = region_of(x[i], y[i], g)
 
         # per-run summary
         sm = summary[run]
@@ -1461,4 +1521,5 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
                     break
         for r in range(ROW_D):
             sm[SM_ROWS + r] = row_counts[r]
-    return summary, series, trips[:n_trips].copy(), snaps[:n_snaps].copy()
+    return (summary, series, trips[:n_trips].copy(), snaps[:n_snaps].copy(), robots,
+            triggers[:n_triggers[0]].copy())

@@ -123,6 +123,10 @@ KEYS: dict[str, Key] = {
 #: 9.4e5, about 250 MB while built); ``trip_rows``: the most trip records the runs can hold, each
 #: robot driving the shortest gap between two regions for every trip (runs x robots x (v0 T_run /
 #: gap + 1); 3.4e6 at the defaults, ~400 MB, where a run of 50 records a few hundred per run).
+#: The ``robots`` and ``deaths`` tables hold at most runs x robots rows, a quarter of ``snapshot_rows``.
+#: The ``recharge_triggers`` rows have no useful bound (one per robot every other tick): row 2 fires
+#: again once rows 5-11 made the robot F_OUT or F_IN, inside a region, so a robot held in a region
+#: fires it whenever its S_hat changes; runs record a few per robot and hour, and the table grows as needed.
 RUN_LIMITS = {"robot_ticks": 2e9, "pair_ticks": 1e11, "occlusion_tests": 6e11, "records": 5e6, "snapshot_rows": 1e6,
               "trip_rows": 1e7}
 #: Milestone snapshots of a run besides the periodic ones: first_T, first_R, first_row5, end.

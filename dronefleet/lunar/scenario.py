@@ -27,9 +27,11 @@ seed key is ``first_run`` (blocks of ``runs`` runs). Run j of every layout and c
 same per-robot streams (spec section 13: common random numbers).
 
 Tables (:func:`simulate`, columns in :func:`table_schemas`): ``summary`` (one row per run),
-``timeseries`` (one row per run and update interval), ``trips`` (one row per trip record) and
-``snapshots`` (network snapshots), as docs/guide/lunar.md lists them. Each carries the config in
-its metadata.
+``timeseries`` (one row per run and update interval), ``trips`` (one row per trip record),
+``snapshots`` (network snapshots), ``robots`` (one row per run and robot: its totals), ``deaths``
+(one row per death), ``recharge_triggers`` (one row per row-2 firing) and ``beacon_costs`` (per
+snapshot, the stored costs of the beacons near T and R), as docs/guide/lunar.md lists them. Each
+carries the config in its metadata.
 """
 
 from __future__ import annotations
@@ -58,7 +60,7 @@ __all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY"
            "check_replayable", "study"]
 
 NAME = "lunar"
-TABLES = ("summary", "timeseries", "trips", "snapshots")
+TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "deaths", "recharge_triggers", "beacon_costs")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.lunar.study`).
 FIGURES: tuple[str, ...] = (*(f"lunar-fig{k:02d}" for k in (3, 4, 5, 6, 7, 8, 9, 11)), "lunar-control")
 SEED_KEY = "first_run"
@@ -148,8 +150,8 @@ def table_schemas() -> dict[str, pyarrow.Schema]:
 
 
 def simulate(config: Config) -> dict[str, pyarrow.Table]:
-    """Every run of ``config`` in one kernel call -> ``{"summary", "timeseries", "trips", "snapshots"}``
-    pyarrow tables, each carrying the config in its metadata."""
+    """Every run of ``config`` in one kernel call -> ``{table: pyarrow.Table}`` of :data:`TABLES`,
+    each carrying the config in its metadata."""
     from ..records import CONFIG_KEY
     from .simulate import simulate as run
 

@@ -1,7 +1,8 @@
 """Run one configuration of the lunar model: all its runs in one kernel call, as pyarrow tables.
 
 :func:`simulate` returns the tables of the contract (``summary``, ``timeseries``, ``trips``,
-``snapshots``); :func:`table_schemas` gives their columns and types. Run j draws its per-robot
+``snapshots``, ``robots``, ``deaths``, ``recharge_triggers``, ``beacon_costs``); :func:`table_schemas`
+gives their columns and types. Run j draws its per-robot
 streams from ``seed * 2**32 + j`` whatever the layout or options (spec section 13), so run j of
 every scenario is paired with run j of every other.
 """
@@ -34,7 +35,7 @@ MODE_NAMES = ("normal", "charging", "reconnect", "backtrack")
 REGION_NAMES = ("T", "N", "R")
 LABEL_NAMES = ("first_T", "first_R", "first_row5", "periodic", "end", "frame")
 
-TABLES = ("summary", "timeseries", "trips", "snapshots")
+TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "deaths", "recharge_triggers", "beacon_costs")
 _I, _F, _S = pa.int64(), pa.float64(), pa.string()
 ROW_NAMES = tuple(f"row{r}" for r in range(1, 12)) + ("rowD",)
 
@@ -62,12 +63,23 @@ _SNAPSHOTS = (
     [("run", _I), ("label", _S), ("t", _F), ("robot", _I), ("status", _S), ("role", _S), ("mode", _S),
      ("x", _F), ("y", _F), ("heading", _F), ("soc", _F), ("load", _I)]
     + [(f"{q}_{r}", _F) for q in ("omega", "vx", "vy", "S") for r in ("T", "N", "R")])
+_ROBOTS = [
+    ("run", _I), ("robot", _I), ("trips", _I), ("distance_m", _F), ("energy_j", _F), ("energy_wh", _F),
+    ("recharges", _I), ("loads", _I), ("unloads", _I), ("time_f_out_s", _F), ("time_f_in_s", _F),
+    ("time_r_s", _F), ("time_b_s", _F), ("died", pa.bool_())]
+_DEATHS = [("run", _I), ("robot", _I), ("t", _F), ("x", _F), ("y", _F), ("role", _S), ("mode", _S), ("region", _S)]
+_TRIGGERS = [("run", _I), ("robot", _I), ("t", _F), ("role", _S), ("soc", _F), ("s_hat_dest", _F), ("s_hat_R", _F),
+             ("x", _F), ("y", _F), ("dist_R_m", _F)]
+_BEACON_COSTS = [("run", _I), ("label", _S), ("t", _F), ("near", _S), ("beacons", _I), ("S_R_mean", _F),
+                 ("S_T_mean", _F)]
+#: The regions whose nearby beacons' stored costs ``beacon_costs`` follows (A36).
+COST_REGIONS = ("T", "R")
 
 
 def table_schemas() -> dict[str, pa.Schema]:
     """``{table: pyarrow.Schema}`` of the tables :func:`simulate` returns (spec sections 12, 19)."""
     return {name: pa.schema(fields) for name, fields in
-            zip(TABLES, (_SUMMARY, _TIMESERIES, _TRIPS, _SNAPSHOTS))}
+            zip(TABLES, (_SUMMARY, _TIMESERIES, _TRIPS, _SNAPSHOTS, _ROBOTS, _DEATHS, _TRIGGERS, _BEACON_COSTS))}
 
 
 @functools.lru_cache(maxsize=1)
@@ -118,7 +130,8 @@ def kernel_inputs(params: LunarParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
 def run_kernel(params: LunarParams) -> tuple[np.ndarray, ...]:
     """The kernel's raw outputs for every run of ``params`` (Ctrl-C stops it): summary
     (runs, N_SUMMARY), series (runs, records, N_SERIES), trips (rows, N_TRIP), snapshots
-    (rows, N_SNAP), float64 (see the column indices of :mod:`dronefleet.lunar.kernel`)."""
+    (rows, N_SNAP), robots (runs x robots, N_LEDGER), row-2 triggers (rows, N_TRIGGER), float64
+    (see the column indices of :mod:`dronefleet.lunar.kernel`)."""
     opts, pars, geometry = kernel_inputs(params)
     runs, seeds = run_seeds(params)
     return interrupt.call(k.run_runs, opts, pars, geometry, seeds, runs, role_table()[0],
@@ -129,13 +142,37 @@ def _names(codes: np.ndarray, names: tuple[str, ...]) -> pa.Array:
     return pa.array(np.asarray(names, dtype=object)[codes.astype(np.int64)], type=pa.string())
 
 
+def _beacon_costs(params: LunarParams, snaps: np.ndarray) -> pa.Table:
+    """Per network snapshot and region X of :data:`COST_REGIONS` (in that order): the alive beacons
+    within comm_radius of X's edge (centre distance < radius + comm_radius) and the mean of their
+    stored SOC costs S^R and S^F_OUT (A36; a beacon holding none counts 0, as it adds nothing to S_hat)."""
+    shots = snaps.reshape(-1, params.n_robots, k.N_SNAP)   # a snapshot is a row per robot, in order
+    layout = build(params)
+    beacon = (shots[:, :, k.SN_STATUS] == k.ALIVE) & (shots[:, :, k.SN_ROLE] == k.B)
+    count, s_r, s_t = [], [], []
+    for region in COST_REGIONS:
+        (cx, cy), reach = layout.centres[region], layout.radii[region] + params.comm_radius
+        near = beacon & ((shots[:, :, k.SN_X] - cx) ** 2 + (shots[:, :, k.SN_Y] - cy) ** 2 < reach * reach)
+        count.append(near.sum(axis=1))
+        with np.errstate(invalid="ignore"):          # no beacon near: NaN
+            s_r.append(np.where(near, shots[:, :, k.SN_S + k.REG_R], 0.0).sum(axis=1) / count[-1])
+            s_t.append(np.where(near, shots[:, :, k.SN_S + k.REG_T], 0.0).sum(axis=1) / count[-1])
+    per_shot = lambda a: np.repeat(shots[:, 0, a], len(COST_REGIONS))  # noqa: E731
+    by_shot = lambda parts: np.stack(parts, axis=1).reshape(-1)  # noqa: E731 (each shot's regions in a row)
+    return pa.table({"run": per_shot(k.SN_RUN).astype(np.int64), "label": _names(per_shot(k.SN_LABEL), LABEL_NAMES),
+                     "t": per_shot(k.SN_K) * params.tau,
+                     "near": pa.array(list(COST_REGIONS) * len(shots), type=pa.string()),
+                     "beacons": by_shot(count).astype(np.int64), "S_R_mean": by_shot(s_r), "S_T_mean": by_shot(s_t)},
+                    schema=table_schemas()["beacon_costs"])
+
+
 def simulate(params: LunarParams) -> dict[str, pa.Table]:
     """Every run of ``params`` (first_run .. first_run + runs - 1): ``{table: pyarrow.Table}`` with
-    the columns of :func:`table_schemas` (summary, timeseries, trips, snapshots; spec sections 12, 19).
+    the columns of :func:`table_schemas` (:data:`TABLES`; spec sections 12, 19).
 
     ``params`` must be valid (``dronefleet.lunar.scenario`` validates it); nothing is checked here.
     """
-    summary, series, trips, snaps = run_kernel(params)
+    summary, series, trips, snaps, robots, triggers = run_kernel(params)
     schemas = table_schemas()
     runs, seeds = run_seeds(params)
     tau = params.tau
@@ -198,4 +235,34 @@ def simulate(params: LunarParams) -> dict[str, pa.Table]:
         for q, region in enumerate(REGION_NAMES):
             cols[f"{quantity}_{region}"] = snaps[:, first + q]
     tables["snapshots"] = pa.table(cols, schema=schemas["snapshots"])
+
+    n = params.n_robots
+    made = np.bincount((i64(trips[:, k.TR_RUN]) - params.first_run) * n + i64(trips[:, k.TR_ROBOT]),
+                       minlength=len(robots))
+    ticks = robots[:, k.LG_TICKS:k.LG_TICKS + 4] * tau
+    died = robots[:, k.LG_DIED_K] >= 0
+    energy = robots[:, k.LG_ENERGY]
+    tables["robots"] = pa.table({
+        "run": i64(robots[:, k.LG_RUN]), "robot": i64(robots[:, k.LG_ROBOT]), "trips": made.astype(np.int64),
+        "distance_m": robots[:, k.LG_MOVES] * (params.v0 * tau), "energy_j": energy, "energy_wh": energy / 3600.0,
+        "recharges": i64(robots[:, k.LG_RECHARGES]), "loads": i64(robots[:, k.LG_LOADS]),
+        "unloads": i64(robots[:, k.LG_UNLOADS]), "time_f_out_s": ticks[:, k.F_OUT], "time_f_in_s": ticks[:, k.F_IN],
+        "time_r_s": ticks[:, k.R], "time_b_s": ticks[:, k.B], "died": died,
+    }, schema=schemas["robots"])
+    dead = robots[died]
+    tables["deaths"] = pa.table({
+        "run": i64(dead[:, k.LG_RUN]), "robot": i64(dead[:, k.LG_ROBOT]), "t": dead[:, k.LG_DIED_K] * tau,
+        "x": dead[:, k.LG_DIED_X], "y": dead[:, k.LG_DIED_Y], "role": _names(dead[:, k.LG_DIED_ROLE], ROLE_NAMES),
+        "mode": _names(dead[:, k.LG_DIED_MODE], MODE_NAMES),
+        "region": _names(dead[:, k.LG_DIED_REGION], (*REGION_NAMES, None)),  # NO_REGION (-1): null
+    }, schema=schemas["deaths"])
+    rx, ry = build(params).centres["R"]
+    tx, ty = triggers[:, k.TG_X], triggers[:, k.TG_Y]
+    tables["recharge_triggers"] = pa.table({
+        "run": i64(triggers[:, k.TG_RUN]), "robot": i64(triggers[:, k.TG_ROBOT]), "t": triggers[:, k.TG_K] * tau,
+        "role": _names(triggers[:, k.TG_ROLE], ROLE_NAMES), "soc": triggers[:, k.TG_SOC],
+        "s_hat_dest": triggers[:, k.TG_S_HAT_DEST], "s_hat_R": triggers[:, k.TG_S_HAT_R], "x": tx, "y": ty,
+        "dist_R_m": np.sqrt((tx - rx) ** 2 + (ty - ry) ** 2),
+    }, schema=schemas["recharge_triggers"])
+    tables["beacon_costs"] = _beacon_costs(params, snaps)
     return tables

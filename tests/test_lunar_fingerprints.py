@@ -33,19 +33,19 @@ RUNS = {
 EXPECTED = {
     "hard_nt_options": {
         "snapshots": "e95451615b763bad65d0ded2e0bf0048d43fcc50abac5fb22fa8ed32d073fb1d",
-        "summary": "08679c0642ddfd80fce31bc91a450998683d05608e4f6b51147c21c8f4dadd98",
+        "summary": "b39decae672be11832f5cf485e40e68ac51367e022bfb20f875a79b042a3ea29",
         "timeseries": "83c2cd6cf1605b0a9883a740cf38cdef84610552022cd3bcf518b7fa853b12f7",
         "trips": "d639a308c01c7c338b03af1c8177ac2eac6b4389312031740f3319dc2a848e16",
     },
     "open_options": {
         "snapshots": "a04ace463f1dbbf49deccb3eb8b210e144f48310fe873d0fc2a51e08ea91170e",
-        "summary": "69179544948fb6f0ac36ce25816ce73695345a5338c7889094b209e6ca84a281",
+        "summary": "e3802c9c328d6692d03cbc8d13e2cbdeae6ca20669f8e50ad302962770023ef3",
         "timeseries": "49583f56102cafb626e25a247ce72e7d36075752d40a86e221a4bb701265a52b",
         "trips": "433eddbaf52bd5ae733239f0f1776f5bb6ae89f79d00c39a0f68fa3382469308",
     },
     "soft_rt": {
         "snapshots": "7e1523c784425a78e111832725c07a2f0c4db619d17f542d699cb56f9b5825a0",
-        "summary": "1c020d3e8d2781c1821bc711ede2af4e2ae4ff7301c9ac463160f544ff066cf4",
+        "summary": "33639e493a840fdf1355f905b442abfff7664bd3ad8bef1ff8b78dd2362719e3",
         "timeseries": "0134e657c6e5c93dbd57d3940091855d1baf62b81bfbd0c65885ee94884bc4a9",
         "trips": "3f34a3872a430f3497c4a9ef1808f7e7b823f28add401118ffc0c61874fd89b1",
     },

@@ -10,8 +10,8 @@ import pyarrow as pa
 
 KEYS = "TNR"
 ROLES = ("F_OUT", "F_IN", "R", "B")
-SUMMARY_INT = ("resources", "trips", "interruptions", "nest_recharges", "sessions", "deaths", "beacons", "mobile",
-               "units_beacons")
+SUMMARY_INT = ("resources", "trips", "interruptions", "nest_recharges", "sessions", "deaths", "depletions", "beacons",
+               "mobile", "units_beacons")
 SUMMARY_FLOAT = (*(f"alignment_{k}" for k in KEYS), *(f"alignment_w_{k}" for k in KEYS),
                  *(f"heading_alignment_{k}" for k in KEYS), "deaths_per_session", "t_first_T", "t_first_R",
                  "t_first_row5", "t_beacons_90")

@@ -19,7 +19,7 @@ ROWS = [f"row{r}" for r in range(1, 12)] + ["rowD"]
 COLUMNS = {
     "summary": [("run", "int64"), ("seed", "int64"), ("layout", "string"), ("battery_wh", "double"),
                 *((name, "int64") for name in ("resources", "trips", "interruptions", "nest_recharges", "sessions",
-                                               "deaths", "beacons", "mobile", "units_beacons")),
+                                               "deaths", "depletions", "beacons", "mobile", "units_beacons")),
                 *((f"{kind}_{key}", "double") for kind in ("alignment", "alignment_w", "heading_alignment")
                   for key in "TNR"),
                 *((name, "double") for name in ("deaths_per_session", "t_first_T", "t_first_R", "t_first_row5",

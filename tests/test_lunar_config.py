@@ -32,6 +32,8 @@ OPTIONS = {"avoidance": ("offset", "turn"), "broadcast_velocity": ("planned", "m
            "broadcast": ("tick", "update"), "weight_form": ("exponent", "bracket", "literal"),
            "fallback": ("visited", "literal"), "turn_on": ("region", "any"),
            "redecide": ("none", "avoid_clear", "beacon_change"), "completion": ("role", "last_region")}
+#: The option words of the readings of the spec's section 21, first the default.
+READINGS = {"depletion": ("fatal", "recorded"), "experience": ("any", "leaving")}
 
 
 def refused(capsys, args, *fragments):
@@ -153,6 +155,11 @@ def test_every_key_refuses_hostile_values_naming_key_and_value(setting, fragment
     ("layot=OPEN", ("unknown key 'layot'", "did you mean 'layout'")),
     ("run.layout=OPEN", ("unknown key 'run.layout'",)),
     ("battery_wh", ("--set needs key=value",)),
+    ("decision_step_m=3", ("guidance.decision_step_m = 3 m is not below robots.comm_radius = 2 m",)),
+    ("soc0_low=1.5", ("energy.soc0_low", "out of range", "[0.001, 1]")),
+    ("energy_scale=0", ("energy.energy_scale", "out of range", "[0.001, 1000]")),
+    ("depletion=dead", ("options.depletion", "'dead'", "'fatal', 'recorded'")),
+    ("experience=away", ("options.experience", "'away'", "'any', 'leaving'")),
 ])
 def test_hostile_set_values_are_refused_in_one_line_and_nothing_is_written(tmp_path, capsys, setting, fragments):
     out = tmp_path / "out"
@@ -181,6 +188,14 @@ def test_hostile_set_values_are_refused_in_one_line_and_nothing_is_written(tmp_p
      ("occlusion-tests", "runs 1 x 9,375 ticks x 500^3", "at most 6e+11", "set los_bodies = false")),
     (["runs=1", "n_robots=500", "duration_s=600"], ()),
     (["los_bodies=true"], ()),  # E4's runs
+    # decisions by distance only within a beacon's range; initial SOCs drawn below soc0
+    (["decision_step_m=2"], ("guidance.decision_step_m = 2 m", "robots.comm_radius = 2 m", "0 turns them off")),
+    (["decision_step_m=1.5", "comm_radius=1"], ("decision_step_m = 1.5 m", "comm_radius = 1 m")),
+    (["decision_step_m=1.99"], ()),
+    (["soc0=0.8"], ("energy.soc0_low = 1 is above energy.soc0 = 0.8", "set soc0_low <= soc0")),
+    (["soc0=0.8", "soc0_low=0.8"], ()),
+    (["soc0_low=0.8"], ()),
+    (["energy_scale=0.001", "depletion=recorded", "experience=leaving"], ()),
 ])
 def test_runs_too_large_or_undefined_are_refused_before_any_work(overrides, fragments):
     if not fragments:
@@ -350,6 +365,9 @@ def test_the_guide_lists_every_key_and_every_option_word():
     for name, key in lunar.KEYS.items():
         assert f"| `{name}` | {key.section} |" in guide, name
     for name, words in OPTIONS.items():
+        assert all(f'"{word}"' in guide for word in words), name
+    for name, words in READINGS.items():
+        assert lunar.KEYS[name].kind == words and SCENARIO.defaults[name] == words[0], name
         assert all(f'"{word}"' in guide for word in words), name
     for limit in ("A42", "A43", "A44"):
         assert f"**{limit}," in guide

@@ -40,7 +40,7 @@ def state(n, **changes):
     for name in ints:
         setattr(s, name, np.zeros(n, dtype=np.int64))
     for name in ("x", "y", "sx", "sy", "theta_a", "theta", "pcx", "pcy", "mdx", "mdy", "energy", "soc_ref",
-                 "bt_budget", "bt_travel", "rc_travel", "kappa"):
+                 "bt_budget", "bt_travel", "rc_travel", "kappa", "driven"):
         setattr(s, name, np.zeros(n))
     for name in ("avoiding", "was_avoiding", "visited_r", "immediate", "search", "decided", "voided", "moved",
                  "loaded_now", "no_r_guidance"):
@@ -58,6 +58,7 @@ def state(n, **changes):
     s.x[:], s.y[:] = g[k.G_SPAWN], g[k.G_SPAWN + 1]
     s.pcx[:], s.mdx[:], s.kappa[:] = 1.0, 1.0, 1.0
     s.energy[:] = pars[k.P_SOC0] * pars[k.P_ECAP]
+    s.soc_ref[:] = pars[k.P_SOC0]
     s.s_c[:], s.reg[:], s.last_left[:], s.nearest[:] = k.F_IN, k.REG_N, k.NO_REGION, -1
     s.hits = np.empty(k.N_RAYS)
     s.counts = np.zeros(8, dtype=np.int64)
@@ -70,7 +71,7 @@ def state(n, **changes):
     s.align, s.align_w = np.empty(3), np.empty(3)
     s.trips, s.snaps = np.empty((n, k.N_TRIP)), np.empty((k.SNAPS_PER_TICK * n, k.N_SNAP))
     s.heading = (s.theta_a, s.theta, s.pcx, s.pcy, s.mdx, s.mdy)
-    s.motion = (s.blocked, s.avoiding, s.was_avoiding, s.moved, s.kappa)
+    s.motion = (s.blocked, s.avoiding, s.was_avoiding, s.moved, s.kappa, s.driven)
     s.memory = (s.omega, s.bvx, s.bvy, s.bsoc, s.binit, s.weight)
     s.inbox = (s.ikey, s.idelta, s.ivx, s.ivy, s.iu)
     s.sensed = (s.sx, s.sy, s.d2, s.nb_cnt, s.nb_list, s.mb_cnt, s.beacons, s.links, s.s_hat, s.no_r_guidance,
@@ -115,10 +116,10 @@ def test_spawn_waits_until_no_body_is_within_two_radii_of_the_spawn_point():
     spawn_x, spawn_y, r_body = s.g[k.G_SPAWN], s.g[k.G_SPAWN + 1], s.pars[k.P_RBODY]
     put(s, 0, spawn_x + 1.9 * r_body, spawn_y)
     s.energy[1] = 0.0
-    assert k.spawn(s.opts, s.pars, s.g, 1, s.status, s.x, s.y, s.energy, s.search) == (1, -1)
+    assert k.spawn(s.opts, s.pars, s.g, 1, s.status, s.x, s.y, s.energy, s.soc_ref, s.search) == (1, -1)
     assert s.status[1] == k.UNSPAWNED
     s.x[0] = spawn_x + 2.01 * r_body
-    assert k.spawn(s.opts, s.pars, s.g, 1, s.status, s.x, s.y, s.energy, s.search) == (2, 1)
+    assert k.spawn(s.opts, s.pars, s.g, 1, s.status, s.x, s.y, s.energy, s.soc_ref, s.search) == (2, 1)
     assert s.status[1] == k.ALIVE and s.search[1] and s.energy[1] == s.pars[k.P_SOC0] * s.pars[k.P_ECAP]
     assert s.status[2] == k.UNSPAWNED
 
@@ -210,7 +211,7 @@ def test_the_ledger_counts_each_robots_unloads_loads_and_charging_sessions():
 def decide(s):
     k.heading_decisions(s.opts, s.pars, s.rng, s.n, s.status, s.role, s.mode, s.n_failed, s.bt_budget, s.bt_travel,
                         s.immediate, s.countdown, s.search, s.s_c, s.visited_r, s.decided, s.heading, s.memory,
-                        s.sensed)
+                        s.sensed, s.motion)
 
 
 def test_a_due_robot_follows_the_guidance_of_its_role_with_two_draws_and_restarts_its_countdown():
@@ -299,6 +300,11 @@ def test_translation_checks_bodies_at_the_positions_already_updated_this_tick():
 # ------------------------------------------------------------------ step 6: energy (section 8)
 
 
+def energy(s, spawned):
+    k.energy_and_deaths(s.opts, s.pars, s.g, s.table, spawned, s.sup, s.status, s.role, s.x, s.y, s.here,
+                        s.loaded_now, s.energy, s.motion, s.sensed, s.trip, s.tally)
+
+
 def test_energy_drains_by_p_out_tau_gains_p_solar_in_r_and_dies_at_zero():
     s = state(3)
     p, tau, e_cap = s.pars, s.pars[k.P_TAU], s.pars[k.P_ECAP]
@@ -307,13 +313,12 @@ def test_energy_drains_by_p_out_tau_gains_p_solar_in_r_and_dies_at_zero():
     put(s, 1, R_C[0], R_C[1], beacon_was=k.R, soc=0.5)
     put(s, 2, *T_C, soc=0.0)
     s.energy[2] = 1e-9
-    k.energy_and_deaths(s.pars, s.g, s.table, 3, s.sup, s.status, s.role, s.x, s.y, s.here, s.loaded_now, s.energy,
-                        s.motion, s.sensed, s.trip, s.tally)
+    energy(s, 3)
     p_out = p[k.P_COMP] + p[k.P_COMM] * 2 + p[k.P_SCAN] + p[k.P_MOVE] * 1.0
     assert s.energy[0] == 0.5 * e_cap + (0.0 - p_out) * tau and s.acc[0, 1] == p_out * tau
     assert s.energy[1] == 0.5 * e_cap + (p[k.P_SOLAR] - p[k.P_COMP]) * tau
     assert list(s.here) == [k.NO_REGION, k.REG_R, k.REG_T]
-    assert (s.status[2], s.sup[2, 0], s.tally[k.TL_DEATHS]) == (k.DEAD, k.S_DEAD, 1)
+    assert (s.status[2], s.sup[2, 0], s.tally[k.TL_DEATHS], s.tally[k.TL_DEPLETIONS]) == (k.DEAD, k.S_DEAD, 1, 1)
 
 
 def energy(s):
@@ -435,3 +440,76 @@ def test_the_tick_loop_stops_before_a_tick_without_room_for_a_trip_or_a_row_2_tr
     s.n_triggers[0] = 0
     end = ticks(s, 3, 0)                                   # ticks 3 .. K; the end snapshot (a row per robot)
     assert (end[0], end[2], end[3]) == (s.opts[k.O_TICKS] + 1, 0, 2) and s.status[0] == k.ALIVE
+
+
+# ------------------------------------------------------------------ the readings of the second review (section 21)
+
+
+def test_decision_step_m_makes_a_robot_decide_when_it_has_driven_that_far_since_its_last_decision():
+    step_m = 0.5
+    s = state(2, decision_step_m=step_m)
+    step = s.pars[k.P_V0] * s.pars[k.P_TAU]
+    put(s, 0, *FREE)
+    s.driven[0] = step_m - step / 2               # this tick's step reaches the decision step
+    put(s, 1, FREE[0], FREE[1] + 1.0)
+    s.driven[1] = step_m - 1.5 * step             # one step short
+    translate(s)
+    assert s.moved[0] and s.immediate[0] and s.driven[0] == step_m + step / 2
+    assert s.moved[1] and not s.immediate[1]
+    decide(s)                                     # countdowns at 100: only robot 0 decides
+    assert s.decided[0] and s.driven[0] == 0.0 and not s.immediate[0]
+    assert not s.decided[1] and s.driven[1] == step_m - 0.5 * step
+
+
+def test_without_decision_step_m_driving_takes_no_decision():
+    s = state(1)
+    put(s, 0, *FREE)
+    s.driven[0] = 100.0
+    translate(s)
+    assert s.moved[0] and not s.immediate[0] and s.driven[0] == 100.0
+
+
+def test_energy_scale_multiplies_every_consumption_term_and_not_the_solar_input():
+    base, scaled = state(2), state(2, energy_scale=2.0)
+    assert np.array_equal(base.pars, kernel_inputs(LunarParams(n_robots=2, energy_scale=1.0))[1])
+    for s in (base, scaled):
+        put(s, 0, *FREE, soc=0.5)
+        s.links[0], s.moved[0], s.avoiding[0], s.loaded_now[0] = 2, True, True, True
+        put(s, 1, R_C[0], R_C[1], beacon_was=k.R, soc=0.5)
+        energy(s, 2)
+    half = 0.5 * base.pars[k.P_ECAP]
+    assert half - scaled.energy[0] == 2.0 * (half - base.energy[0]) > 0.0
+    assert scaled.acc[0, 1] == 2.0 * base.acc[0, 1]
+    solar, comp, tau = base.pars[k.P_SOLAR], base.pars[k.P_COMP], base.pars[k.P_TAU]
+    assert (scaled.pars[k.P_SOLAR], scaled.energy[1]) == (solar, half + (solar - 2.0 * comp) * tau)
+
+
+def test_depletion_recorded_keeps_a_robot_at_soc_0_alive_sends_a_forager_to_r_and_counts_each_depletion():
+    s = state(3, depletion="recorded")
+    put(s, 0, *FREE, role=k.F_OUT)
+    s.energy[0], s.moved[0] = 1e-9, True                     # reaches 0 this tick
+    put(s, 1, *FREE, role=k.R)
+    s.energy[1] = 0.0                                        # already at 0: no new depletion
+    put(s, 2, *T_C, beacon_was=k.F_IN)
+    s.energy[2] = 1e-9
+    energy(s, 3)
+    assert list(s.energy) == [0.0, 0.0, 0.0] and list(s.status) == [k.ALIVE] * 3
+    assert (s.role[0], s.sup[0, 0]) == (k.R, k.S_R)
+    assert (s.role[2], s.sup[2, 0]) == (k.B, k.S_B_F_IN)      # a beacon stays a beacon
+    assert (s.tally[k.TL_DEPLETIONS], s.tally[k.TL_DEATHS]) == (2, 0)
+
+
+def test_experience_leaving_takes_only_the_messages_of_robots_moving_away_from_region_s_c():
+    heard = {}
+    for experience in ("any", "leaving"):
+        s = state(3, experience=experience)
+        put(s, 0, 4.0, N_C[1], role=k.F_OUT, heading=0.0)   # east of N, heading east: leaves N
+        put(s, 1, 4.5, N_C[1] + 1.0, beacon_was=k.F_OUT)
+        put(s, 2, 5.0, N_C[1], role=k.F_OUT, heading=PI)    # heading west: back towards N
+        s.s_c[0] = s.s_c[2] = k.F_IN
+        k.sense_and_communicate(s.opts, s.pars, s.g, s.box, 3, -1, s.status, s.role, s.mode, s.x, s.y, s.energy,
+                                s.s_c, s.soc_ref, s.reg, s.decided, s.immediate, s.heading, s.memory, s.sensed,
+                                s.inbox)
+        assert list(s.nb_cnt[[0, 2]]) == [1, 1]
+        heard[experience] = list(s.ikey[1, [0, 2]])
+    assert heard == {"any": [k.F_IN, k.F_IN], "leaving": [k.F_IN, -1]}

@@ -470,3 +470,71 @@ def test_a_row_the_supervisor_forbids_does_not_fire():
     table[0, :, k.EV_BECOME_BEACON] = -1
     summary, series = k.run_runs(opts, pars, geometry, seeds, runs, table, np.empty((0, k.N_STATE)), stop)[:2]
     assert summary[0, k.SM_ROWS + 0] == 0 and (series[0, :, k.TS_BEACONS] == 0).all()
+
+
+# ------------------------------------------------------------------ the readings of the second review (section 21)
+
+
+def test_at_kappa_soft_5_crossing_the_soft_patch_costs_more_than_the_detour_at_3_about_the_same():
+    """SOFT-RT: the straight R-T way (region edge to edge) against the shortest way round the
+    obstacle kept r_body clear of it, each in joules per v0 at the kernel's powers of a driving robot."""
+    layout = build(LunarParams())
+    g = kernel_geometry(layout)
+    r_body = LunarParams().r_body
+    r, t, radius = np.array(layout.centres["R"]), np.array(layout.centres["T"]), layout.radii["R"]
+    length = math.dist(r, t)
+    gap = length - 2 * radius
+    points = 10_000                                  # the soft part of the straight way, by sampling
+    along = [(radius + gap * (j + 0.5) / points) / length for j in range(points)]
+    soft = gap * sum(k.inside_quad(*(r + (t - r) * f), g) for f in along) / points
+    corners = np.asarray(layout.obstacle, dtype=float)
+    middle = corners.mean(axis=0)
+    out = corners - middle
+    clear = middle + out * (1 + r_body / np.linalg.norm(out, axis=1)[:, None])   # r_body off each corner
+    left = (t - r)[0] * (clear - r)[:, 1] - (t - r)[1] * (clear - r)[:, 0] > 0
+    ways = []
+    for side in (left, ~left):                       # round either end: R, the two corners, T
+        a, b = sorted(clear[side], key=lambda c: math.dist(r, c))
+        ways.append(math.dist(r, a) + math.dist(a, b) + math.dist(b, t) - 2 * radius)
+    detour = min(ways)
+    pars = kernel_inputs(LunarParams())[1]
+
+    def power(kappa):                                # a mobile robot driving, no link, no avoidance
+        return k.power_out(pars[k.P_COMP], pars[k.P_COMM], 0, True, pars[k.P_SCAN], True, pars[k.P_MOVE], kappa,
+                           False, pars[k.P_AVOID])
+
+    def crossing(kappa):
+        return (gap - soft) * power(1.0) + soft * power(kappa)
+
+    assert soft == pytest.approx(0.9, abs=0.01) and gap < detour
+    # in metres at normal-ground power: straight 3.3 m, crossing 5.0 (kappa 3), 6.8 (5); detour 4.6
+    assert detour * power(1.0) < crossing(3.0) < 1.15 * detour * power(1.0)   # about the same (A6/A7)
+    assert crossing(5.0) > 1.4 * detour * power(1.0)                          # clearly dearer
+
+
+def test_the_summary_counts_depletions_fatal_or_recorded():
+    small = dict(n_robots=12, duration_s=120.0, runs=1, battery_wh=0.05)
+    fatal = simulate(LunarParams(**small))["summary"].to_pylist()[0]
+    recorded = simulate(LunarParams(**small, depletion="recorded"))
+    summary = recorded["summary"].to_pylist()[0]
+    assert fatal["depletions"] == fatal["deaths"] > 0
+    assert summary["deaths"] == 0 and summary["depletions"] > 0
+    assert recorded["timeseries"]["n_dead"].to_pylist()[-1] == 0
+
+
+def test_soc0_low_draws_each_robots_initial_soc_from_a_stream_of_its_own():
+    def start(**changes):
+        """The end snapshot of a 1-s run: robots not yet spawned still hold their initial SOC."""
+        snaps = simulate(LunarParams(n_robots=20, duration_s=1.0, runs=2, frames=False, **changes))["snapshots"]
+        rows = [r for r in snaps.to_pylist() if r["label"] == "end"]
+        return {(r["run"], r["robot"]): (r["status"], r["soc"], r["heading"]) for r in rows}
+
+    drawn, full, other = start(soc0_low=0.8), start(), start(soc0_low=0.8, layout="OPEN")
+    waiting = [key for key, (status, _, _) in drawn.items() if status == "unspawned"]
+    socs = [drawn[key][1] for key in waiting]
+    assert len(waiting) > 20 and all(0.8 <= soc < 1.0 for soc in socs) and len(set(socs)) == len(socs)
+    assert all(full[key][1] == 1.0 for key in waiting)
+    assert [drawn[(0, i)][1] for i in range(10, 20)] != [drawn[(1, i)][1] for i in range(10, 20)]  # per run
+    assert all(other[key][1] == drawn[key][1] for key in waiting)           # the same in every layout
+    spawned = [key for key in drawn if key not in waiting]
+    assert spawned and all(drawn[key][2] == full[key][2] for key in spawned)  # the robots' own draws unchanged

@@ -56,8 +56,9 @@ Details the spec leaves to the implementation, as read here:
 - A trip's length and energy are those of the ticks after the one it left its region in, up
   to the one it entered the other in; its duration is (tick entered - tick left) tau.
 - The heading alignment of section 12 uses the motion heading of the last tick.
-- A spawned robot starts with E = soc0 E_cap (soc0 = 1 by default, A39); an unspawned robot
-  counts as soc0 in SOC_sum.
+- A spawned robot starts with E = soc0 E_cap (soc0 = 1 by default, A39), or with soc0_low < soc0
+  at a SOC drawn per robot from U(soc0_low, soc0) at the start of the run, in robot order from a
+  stream of the run's own (SOC0_STREAM); an unspawned robot counts as soc0 in SOC_sum.
 """
 
 import numpy as np
@@ -93,12 +94,15 @@ REDECIDE_NONE, REDECIDE_AVOID_CLEAR, REDECIDE_BEACON_CHANGE = 0, 1, 2
 # Integer options and float parameters: indices into ``opts`` and ``pars``.
 (O_ROBOTS, O_TICKS, O_NT, O_RMAX, O_BLOCKED, O_RATE_W, O_SNAP_EVERY, O_FRAMES, O_AVOID_TURN,
  O_BCAST_MOTION, O_BCAST_UPDATE, O_WFORM, O_FALLBACK_LITERAL, O_TURN_ANY, O_LOS_BODIES, O_REDECIDE,
- O_COMPLETION_LAST, O_INIT_STATE) = range(18)
-N_OPTS = 18
+ O_COMPLETION_LAST, O_INIT_STATE, O_DEPLETION_RECORDED, O_EXPERIENCE_LEAVING) = range(20)
+N_OPTS = 20
 (P_TAU, P_RHO_W, P_RHO_V, P_RHO_P, P_RHO_F, P_RHO_C, P_COMM_R, P_ETA_W, P_PHI, P_V0, P_EPS, P_REWARD,
  P_LAMBDA, P_KAPPA, P_ECAP, P_SOC0, P_MOVE, P_COMP, P_COMM, P_SCAN, P_AVOID, P_EXPLOIT, P_SOLAR,
- P_RBODY, P_IR) = range(25)
-N_PARS = 25
+ P_RBODY, P_IR, P_DECISION_STEP, P_SOC0_LOW) = range(27)
+N_PARS = 27
+#: Key of the stream the initial SOCs are drawn from (soc0_low < soc0, A39): apart from the robots'
+#: streams (keys 0 .. N_a - 1), so that drawing them changes no robot's draws.
+SOC0_STREAM = 2**40
 
 PI = 3.141592653589793
 TWO_PI = 6.283185307179586
@@ -115,7 +119,8 @@ NO_GUIDANCE2 = 1e-24
  SM_T_FIRST_ROW5, SM_T_BEACONS_90, SM_ROWS) = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 12, 15, 18, 19, 20, 21, 22)
 N_ROW_COUNTS = 12          # rows 1..11, then D (index 11)
 ROW_D = 12
-N_SUMMARY = SM_ROWS + N_ROW_COUNTS
+SM_DEPLETIONS = SM_ROWS + N_ROW_COUNTS
+N_SUMMARY = SM_DEPLETIONS + 1
 # Time-series columns (per record, every n_T ticks).
 (TS_K, TS_RESOURCES, TS_TRIPS, TS_INTERRUPTIONS, TS_NEST_RECHARGES, TS_SESSIONS, TS_RATE, TS_MOBILE,
  TS_BEACONS, TS_DEAD, TS_UNSPAWNED, TS_F_OUT, TS_F_IN, TS_R, TS_SOC_SUM, TS_SOC_BEACONS, TS_SOC_MOBILE,
@@ -134,9 +139,9 @@ LABEL_FIRST_T, LABEL_FIRST_R, LABEL_FIRST_ROW5, LABEL_PERIODIC, LABEL_END, LABEL
 #: tick loop has no bounds checks: run_runs makes room for this many before each tick).
 SNAPS_PER_TICK = LABEL_FRAME + 1
 # A run's tallies (``tally``, int64): units deposited, unloads, deaths, the milestone labels
-# reached this tick (a bit per label), and the tick.
-TL_RESOURCES, TL_UNLOADS, TL_DEATHS, TL_MILESTONES, TL_TICK = range(5)
-N_TALLY = 5
+# reached this tick (a bit per label), the tick, and depletions (E reaching 0 from above, fatal or not).
+TL_RESOURCES, TL_UNLOADS, TL_DEATHS, TL_MILESTONES, TL_TICK, TL_DEPLETIONS = range(6)
+N_TALLY = 6
 # A robot's record of a run (``ledger``, a row per robot, float64; section 19): its run and id (set at
 # the run's end), ticks it moved, gross energy used [J], charging sessions (row 4), loads, unloads,
 # ticks alive in each role (F_OUT, F_IN, R, B: LG_TICKS + role), and its death: the tick (-1: none),
@@ -517,10 +522,11 @@ def alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
 
 
 @njit(cache=True, inline='always')
-def spawn(opts, pars, g, spawned, status, x, y, energy, search):
-    """Step 1 (A33): the lowest-id unspawned robot spawns (ALIVE, E = soc0 E_cap, a random first
-    decision) when no robot disc lies within 2 r_body of the spawn point. Returns (spawned, new):
-    the robots that exist now and the one spawned this tick (-1: none)."""
+def spawn(opts, pars, g, spawned, status, x, y, energy, soc_ref, search):
+    """Step 1 (A33): the lowest-id unspawned robot spawns (ALIVE, E = SOC_ref E_cap, a random first
+    decision) when no robot disc lies within 2 r_body of the spawn point; until then its SOC_ref is
+    its initial SOC (soc0, or drawn from U(soc0_low, soc0), A39). Returns (spawned, new): the
+    robots that exist now and the one spawned this tick (-1: none)."""
     n = opts[O_ROBOTS]
     r_body = pars[P_RBODY]
     touch2 = 4.0 * r_body * r_body
@@ -533,7 +539,7 @@ def spawn(opts, pars, g, spawned, status, x, y, energy, search):
         if dx * dx + dy * dy < touch2:
             return spawned, -1
     status[spawned] = ALIVE
-    energy[spawned] = pars[P_SOC0] * pars[P_ECAP]
+    energy[spawned] = soc_ref[spawned] * pars[P_ECAP]
     search[spawned] = True             # its first heading is random (A33)
     return spawned + 1, spawned
 
@@ -544,7 +550,9 @@ def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, 
     """Step 2 (section 5): the snapshot of the end of tick k-1 (``sx``, ``sy``, distances ``d2`` of the
     mobile robots), links (``nb_list``: the beacons in range of each mobile robot, ``links``), S_hat,
     "no R guidance", the nearest beacon, and the mobile broadcasts written into the inboxes of the
-    beacons in range. The robot spawned this tick (``new``) senses nothing, is not sensed, is silent."""
+    beacons in range. The robot spawned this tick (``new``) senses nothing, is not sensed, is silent.
+    With ``experience = "leaving"`` a beacon takes a message only from a robot moving away from
+    region(s_c): its broadcast velocity has a positive component along centre -> robot (Sec 4-1-3)."""
     _, _, pcx, pcy, mdx, mdy = heading
     omega, bvx, bvy, bsoc, binit, _ = memory
     sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest = sensed
@@ -558,6 +566,7 @@ def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, 
     redecide = opts[O_REDECIDE]
     bcast_update = opts[O_BCAST_UPDATE] != 0
     bcast_motion = opts[O_BCAST_MOTION] != 0
+    leaving = opts[O_EXPERIENCE_LEAVING] != 0
     for i in range(spawned):                # a loop: a slice copy may allocate (numba's overlap check)
         sx[i] = x[i]
         sy[i] = y[i]
@@ -632,6 +641,9 @@ def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, 
         gamma = reward if reg[i] == s_c[i] else 0.0
         delta = gamma + lam * best_omega
         mvx, mvy = broadcast_velocity(mode[i] == CHARGING, bcast_motion, v0, pcx[i], pcy[i], mdx[i], mdy[i])
+        # -v_m points back at region(s_c) only while the robot moves away from it (Sec 4-1-3)
+        if leaving and mvx * (x[i] - g[G_CX + s_c[i]]) + mvy * (y[i] - g[G_CY + s_c[i]]) >= 0.0:
+            continue
         used = max(0.0, soc_ref[i] - energy[i] / e_cap)
         for q in range(nb_cnt[i]):
             b = nb_list[i, q]
@@ -654,7 +666,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
     ``t_first[2]``; each robot's unloads, loads and charging sessions in its ``ledger`` row, and each
     row 2 as a trigger record (``triggers``, which has room for one per robot)."""
     theta_a, theta, pcx, pcy, _, _ = heading
-    blocked, avoiding, _, _, _ = motion
+    blocked, avoiding, _, _, _, _ = motion
     omega, bvx, bvy, bsoc, binit, weight = memory
     ikey = inbox[0]
     sx, sy, nb_cnt, s_hat, no_r_guidance = sensed[0], sensed[1], sensed[3], sensed[8], sensed[9]
@@ -732,12 +744,14 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
 
 @njit(cache=True, inline='always')
 def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
-                      countdown, search, s_c, visited_r, decided, heading, memory, sensed):
+                      countdown, search, s_c, visited_r, decided, heading, memory, sensed, motion):
     """Step 4 (7.1, 7.3): the RECONNECT contact test (-> BACKTRACK, an immediate decision), the
     countdown of every mobile robot (restarted at n_T when at 0), and the heading decision of each
     NORMAL or BACKTRACK robot that is due or decides immediately: guidance by its key (with the
-    fallbacks of A18) or a random search, two draws of its stream either way."""
+    fallbacks of A18) or a random search, two draws of its stream either way. A decision restarts
+    the distance driven towards the next one (``decision_step_m``, A1)."""
     theta_a, theta, pcx, pcy, _, _ = heading
+    driven = motion[5]
     _, bvx, bvy, _, _, weight = memory
     nb_cnt, nb_list = sensed[3], sensed[4]
     n_t = opts[O_NT]
@@ -783,6 +797,7 @@ def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt
         theta[i] = theta_a[i]
         pcy[i], pcx[i] = sincos(theta_a[i])
         decided[i] = True
+        driven[i] = 0.0
 
 
 @njit(cache=True, inline='always')
@@ -794,7 +809,7 @@ def avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode
     "turn"``). Sets the motion direction (``mdx``, ``mdy``) translation takes and each robot's
     bodies within reach of a ray or a step (``close[i, :n_near[i]]``)."""
     theta_a, theta, pcx, pcy, mdx, mdy = heading
-    _, avoiding, was_avoiding, _, _ = motion
+    _, avoiding, was_avoiding, _, _, _ = motion
     sx, sy, d2 = sensed[0], sensed[1], sensed[2]
     avoid_turn = opts[O_AVOID_TURN] != 0
     redecide = opts[O_REDECIDE]
@@ -866,9 +881,11 @@ def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, imme
     (``mdx``, ``mdy``) unless the disc there leaves the field, overlaps the hard obstacle or a
     body at its position already updated this tick (A29); ``blocked_limit`` blocked ticks in a row
     give a new random plan. Accumulates the trip's length (soft part, with kappa), the ticks moved
-    (``ledger``) and the RECONNECT and BACKTRACK distances (their ends: NORMAL, an immediate decision)."""
+    (``ledger``), the RECONNECT and BACKTRACK distances (their ends: NORMAL, an immediate decision)
+    and, with ``decision_step_m`` > 0, the distance driven since the last decision (at the step: an
+    immediate decision, A1)."""
     theta_a, theta, pcx, pcy, mdx, mdy = heading
-    blocked, _, _, moved, kappa = motion
+    blocked, _, _, moved, kappa, driven = motion
     d2 = sensed[2]
     acc, ledger = trip[4], trip[5]
     blocked_limit = opts[O_BLOCKED]
@@ -884,6 +901,7 @@ def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, imme
     hard = kind == KIND_HARD
     soft = kind == KIND_SOFT
     kappa_soft = pars[P_KAPPA]
+    decision_step = pars[P_DECISION_STEP]
     for i in range(spawned):
         moved[i] = False
         if status[i] != ALIVE or role[i] == B or mode[i] == CHARGING:
@@ -926,6 +944,10 @@ def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, imme
                 if bt_travel[i] >= bt_budget[i]:
                     mode[i] = NORMAL
                     immediate[i] = True
+            if decision_step > 0.0 and (mode[i] == NORMAL or mode[i] == BACKTRACK):
+                driven[i] += step
+                if driven[i] >= decision_step:
+                    immediate[i] = True
         else:
             blocked[i] += 1
             if blocked[i] >= blocked_limit:
@@ -936,28 +958,40 @@ def translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, imme
 
 
 @njit(cache=True, inline='always')
-def energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion, sensed, trip,
-                      tally):
+def energy_and_deaths(opts, pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion, sensed,
+                      trip, tally):
     """Step 6 (section 8): each alive robot's energy by :func:`tick_energy` (solar input where its
     centre is in R after the move, ``here``: its region now), the gross energy added to its trip,
     and death at E = 0 (row X), counted in ``tally``; in the robot's ``ledger`` row its energy, the
-    tick in its role and the tick it died."""
-    _, avoiding, _, moved, kappa = motion
+    tick in its role and the tick it died. With ``depletion = "recorded"`` a robot at E = 0 lives on
+    (E stays clipped at 0) and a forager takes role R (goCharge) as a robot in role R would go on;
+    either way each E reaching 0 from above counts as a depletion."""
+    _, avoiding, _, moved, kappa, _ = motion
     links = sensed[7]
     acc, ledger = trip[4], trip[5]
+    recorded = opts[O_DEPLETION_RECORDED] != 0
     for i in range(spawned):
         if status[i] != ALIVE:
             continue
+        before = energy[i]
         here[i] = region_of(x[i], y[i], g)
         energy[i], used = tick_energy(energy[i], pars, here[i] == REG_R, role[i] != B, links[i], moved[i], kappa[i],
                                       avoiding[i], loaded_now[i])
         acc[i, 1] += used
         ledger[i, LG_ENERGY] += used
         ledger[i, LG_TICKS + role[i]] += 1.0
-        if energy[i] == 0.0 and take(table, sup, i, EV_DEPLETED):
-            status[i] = DEAD
-            tally[TL_DEATHS] += 1
-            ledger[i, LG_DIED_K] = tally[TL_TICK]
+        if energy[i] != 0.0:
+            continue
+        if not recorded:
+            if take(table, sup, i, EV_DEPLETED):
+                status[i] = DEAD
+                tally[TL_DEATHS] += 1
+                tally[TL_DEPLETIONS] += 1
+                ledger[i, LG_DIED_K] = tally[TL_TICK]
+        elif before > 0.0:
+            tally[TL_DEPLETIONS] += 1
+            if (role[i] == F_OUT or role[i] == F_IN) and take(table, sup, i, EV_GO_CHARGE):
+                role[i] = ROLE_OF_STATE[sup[i, 0]]
 
 
 @njit(cache=True, inline='always')
@@ -1146,19 +1180,19 @@ def run_ticks(opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, f
             return k, spawned, n_trips, n_snaps
         tally[TL_MILESTONES] = 0
         tally[TL_TICK] = k
-        spawned, new = spawn(opts, pars, g, spawned, status, x, y, energy, search)
+        spawned, new = spawn(opts, pars, g, spawned, status, x, y, energy, soc_ref, search)
         sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
                               decided, immediate, heading, memory, sensed, inbox)
         roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, mode, reg, load, loaded_now,
                                  s_c, n_failed, role_k1, role_k2, energy, visited_r, countdown, immediate, search,
                                  heading, motion, memory, inbox, sensed, trip, row_counts, t_first, tally)
         heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
-                          countdown, search, s_c, visited_r, decided, heading, memory, sensed)
+                          countdown, search, s_c, visited_r, decided, heading, memory, sensed, motion)
         avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading,
                   motion, sensed, hits, close, n_near)
         translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, immediate, search, rc_travel,
                     bt_travel, bt_budget, heading, motion, sensed, trip, close, n_near)
-        energy_and_deaths(pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion,
+        energy_and_deaths(opts, pars, g, table, spawned, sup, status, role, x, y, here, loaded_now, energy, motion,
                           sensed, trip, tally)
         n_trips = bookkeeping(pars, k, run_id, spawned, status, role, s_c, energy, here, reg, soc_ref, visited_r, trip,
                               trips, n_trips, t_first, tally)
@@ -1208,6 +1242,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     rho_f, rho_c = pars[P_RHO_F], pars[P_RHO_C]
     e_cap = pars[P_ECAP]
     soc0 = pars[P_SOC0]
+    soc0_low = pars[P_SOC0_LOW]
     kind = int(g[G_KIND])
     box = np.empty(4)
     if kind != KIND_NONE:
@@ -1235,6 +1270,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     n_triggers = np.zeros(1, dtype=np.int64)
 
     rng = np.empty((1, n, 4), dtype=np.uint64)
+    rng_soc0 = np.empty((1, 1, 4), dtype=np.uint64)
     sup = np.zeros((n, 1), dtype=np.int64)
     status = np.zeros(n, dtype=np.int64)
     role = np.zeros(n, dtype=np.int64)
@@ -1276,6 +1312,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     acc = np.zeros((n, 3))            # trip accumulators: length, gross energy, soft length
     moved = np.zeros(n, dtype=np.bool_)
     kappa = np.ones(n)
+    driven = np.zeros(n)              # distance driven since the last heading decision (decision_step_m)
     loaded_now = np.zeros(n, dtype=np.bool_)
     links = np.zeros(n, dtype=np.int64)
     omega = np.zeros((n, 3))
@@ -1311,7 +1348,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     # blocked state, the beacon memory and inbox, what step 2 sensed, the trip in progress (with each
     # robot's record of the run and the row-2 triggers: what section 19 records per robot and event)
     heading = (theta_a, theta, pcx, pcy, mdx, mdy)
-    motion = (blocked, avoiding, was_avoiding, moved, kappa)
+    motion = (blocked, avoiding, was_avoiding, moved, kappa, driven)
     memory = (omega, bvx, bvy, bsoc, binit, weight)
     inbox = (ikey, idelta, ivx, ivy, iu)
     sensed = (sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest)
@@ -1342,6 +1379,11 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         load[:] = 0
         s_c[:] = F_IN
         soc_ref[:] = soc0
+        if soc0_low < soc0:           # A39 option: initial SOCs from a stream of their own (none drawn else)
+            seed_stream(rng_soc0, 0, 0, seeds[run], SOC0_STREAM)
+            for i in range(n):
+                soc_ref[i] = soc0_low + (soc0 - soc0_low) * uniform(rng_soc0, 0, 0)
+                energy[i] = soc_ref[i] * e_cap
         visited_r[:] = False
         n_failed[:] = 0
         countdown[:] = 0
@@ -1355,6 +1397,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         bt_budget[:] = 0.0
         bt_travel[:] = 0.0
         rc_travel[:] = 0.0
+        driven[:] = 0.0
         acc[:] = 0.0
         ledger[:] = 0.0
         ledger[:, LG_DIED_K] = -1.0
@@ -1483,6 +1526,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         sm[SM_NEST_RECHARGES] = row_counts[2]
         sm[SM_SESSIONS] = row_counts[3]
         sm[SM_DEATHS] = tally[TL_DEATHS]
+        sm[SM_DEPLETIONS] = tally[TL_DEPLETIONS]
         n_b = 0
         n_m = 0
         units_b = 0

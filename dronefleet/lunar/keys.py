@@ -67,6 +67,8 @@ KEYS: dict[str, Key] = {
     # guidance
     "update_interval_s": Key("guidance", "s", float, 0.001, 3600.0, "T, heading-decision and beacon-window "
                              "interval; n_T = floor(T / tau) ticks, at least 1 (A2)"),
+    "decision_step_m": Key("guidance", "m", float, 0.0, 20.0, "A1: 0 = heading decisions every T only; > 0 = also "
+                           "each time a robot has driven this far since its last decision (below comm_radius)"),
     "rho_w": Key("guidance", "-", float, 0.0, 1.0, "potential-weight evaporation rate per window (Eq 5-11)"),
     "rho_v": Key("guidance", "-", float, 0.0, 1.0, "guidance-vector update weight (Eq 5-12)"),
     "rho_p": Key("guidance", "-", float, 0.0, 1.0, "SOC-cost learning weight (Eq 5-13)"),
@@ -81,6 +83,10 @@ KEYS: dict[str, Key] = {
     # energy
     "battery_wh": Key("energy", "Wh", float, 0.01, 10_000.0, "E_cap, battery capacity (1 Wh = 3600 J)"),
     "soc0": Key("energy", "-", float, 0.001, 1.0, "initial state of charge (A39)"),
+    "soc0_low": Key("energy", "-", float, 0.001, 1.0, "A39: each robot starts at a SOC drawn from U(soc0_low, soc0); "
+                    "soc0_low = soc0: every robot starts at soc0"),
+    "energy_scale": Key("energy", "-", float, 0.001, 1000.0, "A8: factor on every consumption term (p_move, p_comp, "
+                        "p_comm, p_scan, p_avoid, e_exploit; not p_solar)"),
     "p_move": Key("energy", "W", float, 0.0, 100_000.0, "locomotion power on normal ground while translating (A8)"),
     "p_comp": Key("energy", "W", float, 0.0, 100_000.0, "computation power, every alive robot (A8)"),
     "p_comm": Key("energy", "W", float, 0.0, 100_000.0, "power per active communication link (A8)"),
@@ -110,6 +116,10 @@ KEYS: dict[str, Key] = {
                       "beacon changes", "redecide"),
     "completion": _word("options", "A17: completion by role (and rows 9, 11), or by the last region visited",
                         "completion"),
+    "depletion": _word("options", "A32: SOC 0 kills the robot, or is counted and the robot goes on towards R",
+                       "depletion"),
+    "experience": _word("options", "Sec 4-1-3: beacons take every robot's experience, or only that of robots "
+                        "moving away from the region they last completed", "experience"),
 }
 
 #: Limits on a run's work and memory, checked before any work (:func:`run_size`). ``robot_ticks``:
@@ -239,6 +249,14 @@ def validate(params: LunarParams) -> None:
         raise ConfigError(f"a tick's step v0 * tau = {p.v0:g} * {p.tau:g} = {p.v0 * p.tau:g} m is longer than "
                           f"robots.r_body = {p.r_body:g} m: robots would jump through each other and obstacle "
                           "edges; lower v0 or tau", ("v0", "tau", "r_body"))
+    if p.decision_step_m >= p.comm_radius:
+        raise ConfigError(f"guidance.decision_step_m = {p.decision_step_m:g} m is not below robots.comm_radius = "
+                          f"{p.comm_radius:g} m: decisions by distance are for steps within one beacon's range "
+                          "(0 turns them off)", ("decision_step_m", "comm_radius"))
+    if p.soc0_low > p.soc0:
+        raise ConfigError(f"energy.soc0_low = {p.soc0_low:g} is above energy.soc0 = {p.soc0:g}: initial SOCs are "
+                          "drawn from U(soc0_low, soc0); set soc0_low <= soc0 (= soc0: every robot starts at soc0)",
+                          ("soc0_low", "soc0"))
     if p.first_run + p.runs - 1 > MAX_RUN:
         raise ConfigError(f"runs {p.first_run}-{p.first_run + p.runs - 1} go beyond run index {MAX_RUN:,}",
                           ("first_run", "runs"))

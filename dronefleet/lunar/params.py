@@ -25,6 +25,8 @@ OPTIONS = {
     "turn_on": ("region", "any"),
     "redecide": ("none", "avoid_clear", "beacon_change"),
     "completion": ("role", "last_region"),
+    "depletion": ("fatal", "recorded"),
+    "experience": ("any", "leaving"),
 }
 
 
@@ -44,6 +46,8 @@ class LunarParams:
     """Control step (one tick) [s]."""
     update_interval_s: float = 10.0
     """T, heading-decision and beacon-window interval [s]; n_T = floor(T / tau) ticks (A2)."""
+    decision_step_m: float = 0.0
+    """A1: > 0, a mobile robot also decides each time it has driven this far since its last decision [m]."""
     rho_w: float = 0.1
     """Potential-weight evaporation rate per window [-] (Eq 5-11)."""
     rho_v: float = 0.1
@@ -75,6 +79,10 @@ class LunarParams:
     """E_cap, battery capacity [Wh]."""
     soc0: float = 1.0
     """Initial state of charge [-] (A39)."""
+    soc0_low: float = 1.0
+    """A39: below soc0, each robot's initial SOC is drawn from U(soc0_low, soc0) [-]."""
+    energy_scale: float = 1.0
+    """A8: factor on every consumption term (p_move .. e_exploit; not p_solar) [-]."""
     r_max: int = 6
     """Resource units loaded per visit to T [units] (A11)."""
     p_move: float = 58.0
@@ -133,6 +141,10 @@ class LunarParams:
     """A41: extra heading decisions: none, when avoidance clears, or when the nearest beacon changes."""
     completion: str = "role"
     """A17: completion by role and rows 9/11 ("role") or by the last region visited ("last_region")."""
+    depletion: str = "fatal"
+    """A32: SOC 0 kills ("fatal") or is counted and the robot goes on towards R ("recorded")."""
+    experience: str = "any"
+    """Sec 4-1-3: beacons take messages from every robot ("any") or from robots leaving region(s_c) ("leaving")."""
 
     @property
     def n_T(self) -> int:

@@ -41,7 +41,8 @@ ROW_NAMES = tuple(f"row{r}" for r in range(1, 12)) + ("rowD",)
 
 _SUMMARY = (
     [("run", _I), ("seed", _I), ("layout", _S), ("battery_wh", _F), ("resources", _I), ("trips", _I),
-     ("interruptions", _I), ("nest_recharges", _I), ("sessions", _I), ("deaths", _I), ("beacons", _I),
+     ("interruptions", _I), ("nest_recharges", _I), ("sessions", _I), ("deaths", _I), ("depletions", _I),
+     ("beacons", _I),
      ("mobile", _I), ("units_beacons", _I),
      ("alignment_T", _F), ("alignment_N", _F), ("alignment_R", _F),
      ("alignment_w_T", _F), ("alignment_w_N", _F), ("alignment_w_R", _F),
@@ -116,6 +117,8 @@ def kernel_inputs(params: LunarParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     opts[k.O_REDECIDE] = ("none", "avoid_clear", "beacon_change").index(p.redecide)
     opts[k.O_COMPLETION_LAST] = p.completion == "last_region"
     opts[k.O_INIT_STATE] = role_table()[1]
+    opts[k.O_DEPLETION_RECORDED] = p.depletion == "recorded"
+    opts[k.O_EXPERIENCE_LEAVING] = p.experience == "leaving"
     pars = np.zeros(k.N_PARS)
     pars[k.P_TAU], pars[k.P_RHO_W], pars[k.P_RHO_V], pars[k.P_RHO_P] = p.tau, p.rho_w, p.rho_v, p.rho_p
     pars[k.P_RHO_F], pars[k.P_RHO_C], pars[k.P_COMM_R], pars[k.P_ETA_W] = p.rho_f, p.rho_c, p.comm_radius, p.eta_w
@@ -124,6 +127,10 @@ def kernel_inputs(params: LunarParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     pars[k.P_MOVE], pars[k.P_COMP], pars[k.P_COMM], pars[k.P_SCAN] = p.p_move, p.p_comp, p.p_comm, p.p_scan
     pars[k.P_AVOID], pars[k.P_EXPLOIT], pars[k.P_SOLAR] = p.p_avoid, p.e_exploit, p.p_solar
     pars[k.P_RBODY], pars[k.P_IR] = p.r_body, p.ir_range
+    pars[k.P_DECISION_STEP], pars[k.P_SOC0_LOW] = p.decision_step_m, p.soc0_low
+    if p.energy_scale != 1.0:  # A8: scaled once here, so that the default's arithmetic is untouched
+        for c in (k.P_MOVE, k.P_COMP, k.P_COMM, k.P_SCAN, k.P_AVOID, k.P_EXPLOIT):
+            pars[c] *= p.energy_scale
     return opts, pars, kernel_geometry(build(p))
 
 
@@ -184,7 +191,8 @@ def simulate(params: LunarParams) -> dict[str, pa.Table]:
             "battery_wh": np.full(len(runs), float(params.battery_wh))}
     for name, c in (("resources", k.SM_RESOURCES), ("trips", k.SM_TRIPS), ("interruptions", k.SM_INTERRUPTIONS),
                     ("nest_recharges", k.SM_NEST_RECHARGES), ("sessions", k.SM_SESSIONS), ("deaths", k.SM_DEATHS),
-                    ("beacons", k.SM_BEACONS), ("mobile", k.SM_MOBILE), ("units_beacons", k.SM_UNITS_BEACONS)):
+                    ("depletions", k.SM_DEPLETIONS), ("beacons", k.SM_BEACONS), ("mobile", k.SM_MOBILE),
+                    ("units_beacons", k.SM_UNITS_BEACONS)):
         cols[name] = i64(summary[:, c])
     for q, region in enumerate(REGION_NAMES):
         cols[f"alignment_{region}"] = summary[:, k.SM_ALIGN + q]

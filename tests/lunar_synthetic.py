@@ -150,11 +150,59 @@ def _snapshots(params, runs):
                                     else pa.float64()) for name, values in cols.items()})
 
 
+def _robots(params, runs):
+    """Per run and robot: robot j made j % 4 trips over 100 m a trip; the last robot died."""
+    ids = [(r, robot) for r in runs for robot in range(params.n_robots)]
+    half = params.duration_s / 4
+    cols = {"run": [r for r, _ in ids], "robot": [robot for _, robot in ids],
+            "trips": [robot % 4 for _, robot in ids], "distance_m": [100.0 * (robot % 4) for _, robot in ids],
+            "energy_j": [6000.0 * (robot % 4) for _, robot in ids],
+            "energy_wh": [6000.0 * (robot % 4) / 3600 for _, robot in ids],
+            "recharges": [robot % 2 for _, robot in ids], "loads": [robot % 3 for _, robot in ids],
+            "unloads": [robot % 3 for _, robot in ids], "time_f_out_s": [half] * len(ids),
+            "time_f_in_s": [half] * len(ids), "time_r_s": [half] * len(ids), "time_b_s": [half] * len(ids),
+            "died": [robot == params.n_robots - 1 for _, robot in ids]}
+    types_ = {"run": pa.int64(), "robot": pa.int64(), "trips": pa.int64(), "recharges": pa.int64(),
+              "loads": pa.int64(), "unloads": pa.int64(), "died": pa.bool_()}
+    return pa.table({name: pa.array(values, types_.get(name, pa.float64())) for name, values in cols.items()})
+
+
+def _deaths(params, runs):
+    """The last robot dies in role R at (6, 5), outside every region, half-way through each run."""
+    return pa.table({"run": pa.array(runs, pa.int64()), "robot": pa.array([params.n_robots - 1] * len(runs), pa.int64()),
+                     "t": pa.array([params.duration_s / 2] * len(runs), pa.float64()),
+                     "x": pa.array([6.0] * len(runs), pa.float64()), "y": pa.array([5.0] * len(runs), pa.float64()),
+                     "role": pa.array(["R"] * len(runs), pa.string()),
+                     "mode": pa.array(["normal"] * len(runs), pa.string()),
+                     "region": pa.array([None] * len(runs), pa.string())})
+
+
+def _recharge_triggers(params, runs):
+    """One recharging interruption a run, robot 21 at SOC 0.3, a quarter of the way through."""
+    n = len(runs)
+    return pa.table({"run": pa.array(runs, pa.int64()), "robot": pa.array([21] * n, pa.int64()),
+                     "t": pa.array([params.duration_s / 4] * n, pa.float64()), "role": pa.array(["F_OUT"] * n),
+                     **{name: pa.array([value] * n, pa.float64()) for name, value in
+                        (("soc", 0.3), ("s_hat_dest", 0.1), ("s_hat_R", 0.15), ("x", 3.0), ("y", 4.0),
+                         ("dist_R_m", 5.0))}})
+
+
+def _beacon_costs(params, runs):
+    """At the end of each run, 3 beacons near T and 2 near R, with the costs of their snapshot rows."""
+    n = 2 * len(runs)
+    return pa.table({"run": pa.array([r for r in runs for _ in "TR"], pa.int64()),
+                     "label": pa.array(["end"] * n), "t": pa.array([params.duration_s] * n, pa.float64()),
+                     "near": pa.array(list("TR") * len(runs)), "beacons": pa.array([3, 2] * len(runs), pa.int64()),
+                     "S_R_mean": pa.array([0.05] * n, pa.float64()), "S_T_mean": pa.array([0.05] * n, pa.float64())})
+
+
 def simulate(params):
-    """The four tables of ``params``' runs (first_run .. first_run + runs - 1), synthetic."""
+    """The tables of ``params``' runs (first_run .. first_run + runs - 1), synthetic."""
     runs = list(range(params.first_run, params.first_run + params.runs))
     return {"summary": _summary(params, runs), "timeseries": _timeseries(params, runs),
-            "trips": _trips(params, runs), "snapshots": _snapshots(params, runs)}
+            "trips": _trips(params, runs), "snapshots": _snapshots(params, runs), "robots": _robots(params, runs),
+            "deaths": _deaths(params, runs), "recharge_triggers": _recharge_triggers(params, runs),
+            "beacon_costs": _beacon_costs(params, runs)}
 
 
 def module():

@@ -321,11 +321,6 @@ def test_energy_drains_by_p_out_tau_gains_p_solar_in_r_and_dies_at_zero():
     assert (s.status[2], s.sup[2, 0], s.tally[k.TL_DEATHS], s.tally[k.TL_DEPLETIONS]) == (k.DEAD, k.S_DEAD, 1, 1)
 
 
-def energy(s):
-    k.energy_and_deaths(s.pars, s.g, s.table, s.n, s.sup, s.status, s.role, s.x, s.y, s.here, s.loaded_now, s.energy,
-                        s.motion, s.sensed, s.trip, s.tally)
-
-
 def test_energy_adds_each_robots_energy_and_tick_in_its_role_to_its_ledger_and_the_tick_it_died():
     s = state(2)
     put(s, 0, *FREE, role=k.F_IN, soc=0.5)
@@ -333,10 +328,10 @@ def test_energy_adds_each_robots_energy_and_tick_in_its_role_to_its_ledger_and_t
     put(s, 1, *T_C, beacon_was=k.R, soc=0.0)
     s.energy[1] = 1e-9
     s.tally[k.TL_TICK] = 57
-    energy(s)
+    energy(s, 2)
     used = s.acc[0, 1]
     s.tally[k.TL_TICK] = 58
-    energy(s)
+    energy(s, 2)
     ticks_0, ticks_1 = (list(s.ledger[i, k.LG_TICKS:k.LG_TICKS + 4]) for i in (0, 1))
     assert ticks_0 == [0.0, 2.0, 0.0, 0.0] and ticks_1 == [0.0, 0.0, 0.0, 1.0]   # F_OUT, F_IN, R, B
     assert s.ledger[0, k.LG_ENERGY] == s.acc[0, 1] and s.acc[0, 1] > used > 0.0   # the trip's, from the same ticks

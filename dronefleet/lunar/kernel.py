@@ -56,7 +56,7 @@ Details the spec leaves to the implementation, as read here:
 - A trip's length and energy are those of the ticks after the one it left its region in, up
   to the one it entered the other in; its duration is (tick entered - tick left) tau.
 - The heading alignment of section 12 uses the motion heading of the last tick.
-- A spawned robot starts with E = soc0 E_cap (soc0 = 1 by default, A39), or with soc0_low < soc0
+- A spawned robot starts with E = soc0 E_cap (soc0 = 1 by default, A39), or with 0 < soc0_low < soc0
   at a SOC drawn per robot from U(soc0_low, soc0) at the start of the run, in robot order from a
   stream of the run's own (SOC0_STREAM); an unspawned robot counts as soc0 in SOC_sum.
 """
@@ -100,7 +100,7 @@ N_OPTS = 20
  P_LAMBDA, P_KAPPA, P_ECAP, P_SOC0, P_MOVE, P_COMP, P_COMM, P_SCAN, P_AVOID, P_EXPLOIT, P_SOLAR,
  P_RBODY, P_IR, P_DECISION_STEP, P_SOC0_LOW) = range(27)
 N_PARS = 27
-#: Key of the stream the initial SOCs are drawn from (soc0_low < soc0, A39): apart from the robots'
+#: Key of the stream the initial SOCs are drawn from (0 < soc0_low < soc0, A39): apart from the robots'
 #: streams (keys 0 .. N_a - 1), so that drawing them changes no robot's draws.
 SOC0_STREAM = 2**40
 
@@ -1379,7 +1379,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         load[:] = 0
         s_c[:] = F_IN
         soc_ref[:] = soc0
-        if soc0_low < soc0:           # A39 option: initial SOCs from a stream of their own (none drawn else)
+        if 0.0 < soc0_low < soc0:     # A39 option: initial SOCs from a stream of their own (none drawn else)
             seed_stream(rng_soc0, 0, 0, seeds[run], SOC0_STREAM)
             for i in range(n):
                 soc_ref[i] = soc0_low + (soc0 - soc0_low) * uniform(rng_soc0, 0, 0)

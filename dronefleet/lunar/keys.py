@@ -83,8 +83,8 @@ KEYS: dict[str, Key] = {
     # energy
     "battery_wh": Key("energy", "Wh", float, 0.01, 10_000.0, "E_cap, battery capacity (1 Wh = 3600 J)"),
     "soc0": Key("energy", "-", float, 0.001, 1.0, "initial state of charge (A39)"),
-    "soc0_low": Key("energy", "-", float, 0.001, 1.0, "A39: each robot starts at a SOC drawn from U(soc0_low, soc0); "
-                    "soc0_low = soc0: every robot starts at soc0"),
+    "soc0_low": Key("energy", "-", float, 0.0, 1.0, "A39: if > 0, each robot starts at a SOC drawn from "
+                    "U(soc0_low, soc0); 0: every robot starts at soc0"),
     "energy_scale": Key("energy", "-", float, 0.001, 1000.0, "A8: factor on every consumption term (p_move, p_comp, "
                         "p_comm, p_scan, p_avoid, e_exploit; not p_solar)"),
     "p_move": Key("energy", "W", float, 0.0, 100_000.0, "locomotion power on normal ground while translating (A8)"),
@@ -255,7 +255,7 @@ def validate(params: LunarParams) -> None:
                           "(0 turns them off)", ("decision_step_m", "comm_radius"))
     if p.soc0_low > p.soc0:
         raise ConfigError(f"energy.soc0_low = {p.soc0_low:g} is above energy.soc0 = {p.soc0:g}: initial SOCs are "
-                          "drawn from U(soc0_low, soc0); set soc0_low <= soc0 (= soc0: every robot starts at soc0)",
+                          "drawn from U(soc0_low, soc0); set 0 < soc0_low <= soc0 (0: every robot starts at soc0)",
                           ("soc0_low", "soc0"))
     if p.first_run + p.runs - 1 > MAX_RUN:
         raise ConfigError(f"runs {p.first_run}-{p.first_run + p.runs - 1} go beyond run index {MAX_RUN:,}",

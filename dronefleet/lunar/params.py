@@ -79,8 +79,8 @@ class LunarParams:
     """E_cap, battery capacity [Wh]."""
     soc0: float = 1.0
     """Initial state of charge [-] (A39)."""
-    soc0_low: float = 1.0
-    """A39: below soc0, each robot's initial SOC is drawn from U(soc0_low, soc0) [-]."""
+    soc0_low: float = 0.0
+    """A39: if > 0, each robot's initial SOC is drawn from U(soc0_low, soc0); 0: every robot starts at soc0 [-]."""
     energy_scale: float = 1.0
     """A8: factor on every consumption term (p_move .. e_exploit; not p_solar) [-]."""
     r_max: int = 6

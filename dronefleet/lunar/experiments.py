@@ -30,8 +30,8 @@ from ..config import SweepError, shipped_config
 
 __all__ = ["EXPERIMENTS", "CONDITION_COLUMNS", "CURVE_METRICS", "TRIP_METRICS", "RUN_STATS", "BIN_S", "SELECTED",
            "OUT_OF", "CHUNK_RUNS", "grid_path", "condition_of", "condition_row", "selected_count", "selected",
-           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "highlighted", "chunks", "run_chunks",
-           "run_configs"]
+           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "highlighted", "chunks",
+           "run_chunks", "run_configs"]
 
 #: The experiments with a sweep file, ``configs/sweeps/lunar-<name>.toml`` (section 14).
 EXPERIMENTS = ("e1", "e2", "e3", "eps1")
@@ -141,12 +141,15 @@ def trip_bins(trips: pd.DataFrame, summary: pd.DataFrame, bin_s: float = BIN_S) 
     pooled over the selected runs (and over all runs) per ``bin_s`` bin of their entry time.
 
     Returns one row per (condition, selection, metric, bin): ``condition``, ``selection``,
-    ``metric``, ``bin_start_s`` [s] (entry times in [bin_start_s, bin_start_s + bin_s)), ``mean``,
-    ``sd``, ``trips``.
+    ``metric``, ``bin_start_s`` [s] (entry times in (bin_start_s, bin_start_s + bin_s]: closed on
+    the right, so that a trip entering at T_run falls in the bin that ends there, not a bin of its
+    own after the run; entries are at tick 1 or later, never at 0), ``mean``, ``sd``, ``trips``.
     """
     frames = []
     for selection, rows in _selections(trips, summary):
-        rows = rows.assign(bin_start_s=np.floor(rows["t_entered"].to_numpy() / bin_s) * bin_s)
+        # 1e-9: an entry at a bin's end (tick * tau rounded up by a few ulps) stays in that bin
+        ends = np.maximum(np.ceil(rows["t_entered"].to_numpy() / bin_s - 1e-9), 1.0)
+        rows = rows.assign(bin_start_s=(ends - 1.0) * bin_s)
         long = rows.melt(id_vars=["condition", "bin_start_s"], value_vars=list(TRIP_METRICS), var_name="metric")
         long["value"] = long["value"].astype(np.float64)
         stats = _stats(long.groupby(["condition", "metric", "bin_start_s"], sort=True), "value", "trips")
@@ -186,11 +189,18 @@ def run_stats(summary: pd.DataFrame, columns: Iterable[str] = RUN_STATS) -> pd.D
     return pd.concat(frames, ignore_index=True)[["condition", "selection", "column", "mean", "sd", "runs"]]
 
 
-def highlighted(frames: pd.DataFrame, t_end: float, window_s: float, count: int = 3) -> list[int]:
-    """Figs 6-5, 6-6: the ``count`` robots that travelled farthest while mobile over the frames of
+#: The roles Figs 6-5 and 6-6 highlight one robot of, in order: the thesis's three robots are an
+#: outbound one, an inbound one and one on its way to recharge (L1061).
+HIGHLIGHTED_ROLES = ("F_OUT", "F_IN", "R")
+
+
+def highlighted(frames: pd.DataFrame, t_end: float, window_s: float) -> pd.DataFrame:
+    """Figs 6-5, 6-6: per role of :data:`HIGHLIGHTED_ROLES`, of the robots alive in that role at
+    the frame ``t_end``, the one that travelled farthest while mobile over the frames of
     (t_end - window_s, t_end]: the summed straight distance between consecutive frames of the
-    window in which the robot is alive and in a mobile role at both ends (ties: the lower id).
-    ``frames``: the snapshot rows labelled "frame" of one run."""
+    window in which the robot is alive and in a mobile role at both ends (ties: the lower id; a
+    role no robot that moved holds is left out). ``frames``: the snapshot rows labelled "frame"
+    of one run. Returns ``robot``, ``role`` rows in role order."""
     window = frames[(frames["t"] > t_end - window_s - 1e-9) & (frames["t"] <= t_end + 1e-9)]
     window = window.sort_values(["robot", "t"], kind="mergesort")
     mobile = ((window["status"] == "alive") & (window["role"] != "B")).to_numpy()
@@ -198,8 +208,13 @@ def highlighted(frames: pd.DataFrame, t_end: float, window_s: float, count: int 
     step = (robot[1:] == robot[:-1]) & mobile[1:] & mobile[:-1]
     moved = pd.Series(np.where(step, np.hypot(np.diff(x), np.diff(y)), 0.0)).groupby(robot[1:]).sum()
     moved = moved[moved > 0]
-    order = sorted(moved.items(), key=lambda item: (-item[1], item[0]))
-    return [int(r) for r, _ in order[:count]]
+    last = window[(window["t"] > t_end - 1e-9) & (window["status"] == "alive")].set_index("robot")["role"]
+    rows = []
+    for role in HIGHLIGHTED_ROLES:
+        mine = moved[moved.index.isin(last.index[last == role])]
+        if len(mine):
+            rows.append({"robot": int(min(mine.index, key=lambda r: (-mine[r], r))), "role": role})
+    return pd.DataFrame(rows, columns=["robot", "role"]).astype({"robot": np.int64, "role": object})
 
 
 def chunks(config: Any, size: int = CHUNK_RUNS) -> list[Any]:

@@ -166,14 +166,34 @@ def test_the_highlighted_robots_are_one_per_role_that_travelled_farthest_while_m
     frames = pd.DataFrame({"robot": [0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3, 4, 4, 4], "t": [10.0, 20.0, 30.0] * 5,
                            "x": [0, 5, 5, 0, 1, 2, 0, 9, 9, 0, 3, 6, 0, 9, 18], "y": [0.0] * 15,
                            "status": ["alive"] * 15,
-                           "role": ["F_OUT"] * 6 + ["B"] * 3 + ["R"] * 3 + ["F_IN"] * 2 + ["B"]})
+                           "role": ["F_OUT"] * 6 + ["B"] * 3 + ["R"] * 3 + ["F_IN", "F_IN", "B"]})
 
     def picked(window):
         return experiments.highlighted(frames, 30.0, window).to_dict("records")
 
-    # robot 2 is a beacon; robot 4 is one at the end; roles in the thesis's order (out, in, recharge)
-    assert picked(300.0) == [{"robot": 0, "role": "F_OUT"}, {"robot": 3, "role": "R"}]
+    # robot 2 is a beacon; robot 4 drove 9 m as F_IN, then became one (its last 9 m do not count);
+    # roles in the thesis's order (out, in, recharge)
+    assert picked(300.0) == [{"robot": 0, "role": "F_OUT"}, {"robot": 4, "role": "F_IN"}, {"robot": 3, "role": "R"}]
     assert picked(15.0) == [{"robot": 1, "role": "F_OUT"}, {"robot": 3, "role": "R"}]   # robot 0 still in (15, 30]
+
+
+def test_the_exploitation_snapshot_is_the_last_whose_window_shows_every_role_driving(monkeypatch):
+    times = np.arange(10.0, 201.0, 10.0)
+
+    def frames(r_stops):
+        # robots 0, 1, 2 drive as F_OUT, F_IN, R; robot 2 stands still (charging) from r_stops on
+        rows = [{"robot": robot, "t": t, "status": "alive", "role": role, "y": 0.0,
+                 "x": min(t, r_stops) if robot == 2 else t}
+                for robot, role in enumerate(("F_OUT", "F_IN", "R")) for t in times]
+        return pd.DataFrame(rows)
+
+    monkeypatch.setattr(study, "PATH_WINDOW_S", 60.0)
+    # half of the run (100 s) shows robot 2 standing: the last end whose window holds its step 20 -> 30 s
+    # is 80 (the frames of the window: 20 s .. 80 s)
+    assert study._exploitation_time(frames(30.0), "lunar-fig05") == 80.0
+    assert study._exploitation_time(frames(30.0), "lunar-fig06") == 80.0
+    assert study._exploitation_time(frames(500.0), "lunar-fig06") == 200.0
+    assert study._exploitation_time(frames(10.0), "lunar-fig05") == 100.0   # never drives: half of the run
 
 
 def test_chunks_cover_the_configurations_runs():
@@ -396,6 +416,8 @@ def test_fig08_whiskers_are_standard_errors_and_say_so(synthetic_results, kept):
         half = np.array([abs(segment[1, 1] - segment[0, 1]) / 2 for segment in bars.get_segments()])
         assert np.allclose(half, (rows["sd"] / np.sqrt(rows["trips"])).dropna().to_numpy()), container.get_label()
     assert "standard error" in fig.legends[0].get_title().get_text()
+    curves, _ = _draw(context, "lunar-fig07", kept)   # the bands of the curves too
+    assert "standard error" in curves.legends[0].get_title().get_text()
 
 
 def _time_axes(fig):
@@ -462,8 +484,9 @@ def test_guidance_vectors_are_arrows_of_one_length_shaded_by_magnitude(synthetic
         strongest, weakest = np.argmax(magnitude), np.argmin(magnitude)
         if magnitude[strongest] > magnitude[weakest]:   # the stronger vector is the darker shade
             assert shades[strongest][:3].sum() < shades[weakest][:3].sum(), key
-    labels = {ax.get_ylabel() for ax in fig.axes}
-    assert {f"vector to {key} [m/s]" for key in figures.KEY_COLOURS} <= labels   # a colour bar per key
+    bars = [ax for ax in fig.axes if ax.get_title() in figures.KEY_COLOURS]   # a colour bar per key
+    assert sorted(ax.get_title() for ax in bars) == ["N", "R", "T"]
+    assert "guidance vector magnitude [m/s]" in {ax.get_ylabel() for ax in bars}
 
 
 def test_mobile_robots_are_drawn_with_their_heading(synthetic_results, kept):
@@ -472,7 +495,7 @@ def test_mobile_robots_are_drawn_with_their_heading(synthetic_results, kept):
     context, _ = synthetic_results
     (fig,) = _draw(context, "lunar-fig03", kept)
     rows = pd.read_parquet(context.root / "lunar-fig03" / "snapshots.parquet")
-    mobile = rows[(rows["status"] == "alive") & (rows["role"] != "B")]
+    mobile = rows[(rows["status"] == "alive") & (rows["role"] != "B") & (rows["mode"] != "charging")]
     (headings,) = [q for q in _quivers(fig.axes[0]) if q.N == len(mobile)]
     assert np.allclose(np.arctan2(headings.V, headings.U), mobile["heading"])
     assert np.allclose(np.hypot(headings.U, headings.V), figures.ARROW_M)

@@ -30,8 +30,8 @@ from ..config import SweepError, shipped_config
 
 __all__ = ["EXPERIMENTS", "CONDITION_COLUMNS", "CURVE_METRICS", "TRIP_METRICS", "RUN_STATS", "BIN_S", "SELECTED",
            "OUT_OF", "CHUNK_RUNS", "grid_path", "condition_of", "condition_row", "selected_count", "selected",
-           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "highlighted", "chunks",
-           "run_chunks", "run_configs"]
+           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "drives", "highlighted",
+           "chunks", "run_chunks", "run_configs"]
 
 #: The experiments with a sweep file, ``configs/sweeps/lunar-<name>.toml`` (section 14).
 EXPERIMENTS = ("e1", "e2", "e3", "eps1")
@@ -194,26 +194,33 @@ def run_stats(summary: pd.DataFrame, columns: Iterable[str] = RUN_STATS) -> pd.D
 HIGHLIGHTED_ROLES = ("F_OUT", "F_IN", "R")
 
 
+def drives(frames: pd.DataFrame) -> pd.DataFrame:
+    """The steps between consecutive frames of each robot (``frames``: the snapshot rows labelled
+    "frame" of one run) in which it is alive and in one role at both ends and moved: ``robot``,
+    ``role``, ``t_from``, ``t_to`` [s], ``length`` [m] (straight)."""
+    rows = frames.sort_values(["robot", "t"], kind="mergesort")
+    alive = (rows["status"] == "alive").to_numpy()
+    robot, role, t, x, y = (rows[c].to_numpy() for c in ("robot", "role", "t", "x", "y"))
+    length = np.hypot(np.diff(x), np.diff(y))
+    keep = (robot[1:] == robot[:-1]) & alive[1:] & alive[:-1] & (role[1:] == role[:-1]) & (length > 0)
+    return pd.DataFrame({"robot": robot[1:][keep], "role": role[1:][keep], "t_from": t[:-1][keep],
+                         "t_to": t[1:][keep], "length": length[keep]})
+
+
 def highlighted(frames: pd.DataFrame, t_end: float, window_s: float) -> pd.DataFrame:
-    """Figs 6-5, 6-6: per role of :data:`HIGHLIGHTED_ROLES`, of the robots alive in that role at
-    the frame ``t_end``, the one that travelled farthest while mobile over the frames of
-    (t_end - window_s, t_end]: the summed straight distance between consecutive frames of the
-    window in which the robot is alive and in a mobile role at both ends (ties: the lower id; a
-    role no robot that moved holds is left out). ``frames``: the snapshot rows labelled "frame"
-    of one run. Returns ``robot``, ``role`` rows in role order."""
-    window = frames[(frames["t"] > t_end - window_s - 1e-9) & (frames["t"] <= t_end + 1e-9)]
-    window = window.sort_values(["robot", "t"], kind="mergesort")
-    mobile = ((window["status"] == "alive") & (window["role"] != "B")).to_numpy()
-    robot, x, y = (window[c].to_numpy() for c in ("robot", "x", "y"))
-    step = (robot[1:] == robot[:-1]) & mobile[1:] & mobile[:-1]
-    moved = pd.Series(np.where(step, np.hypot(np.diff(x), np.diff(y)), 0.0)).groupby(robot[1:]).sum()
-    moved = moved[moved > 0]
-    last = window[(window["t"] > t_end - 1e-9) & (window["status"] == "alive")].set_index("robot")["role"]
+    """Figs 6-5, 6-6: per role of :data:`HIGHLIGHTED_ROLES`, the robot that drove farthest in
+    that role over the frames of (t_end - window_s, t_end] (:func:`drives` within it; ties: the
+    lower id; a robot is highlighted once, for the first role it leads; a role no robot drove in
+    is left out). ``frames``: the snapshot rows labelled "frame" of one run. Returns ``robot``,
+    ``role`` rows in role order."""
+    steps = drives(frames)
+    steps = steps[(steps["t_from"] > t_end - window_s - 1e-9) & (steps["t_to"] <= t_end + 1e-9)]
     rows = []
     for role in HIGHLIGHTED_ROLES:
-        mine = moved[moved.index.isin(last.index[last == role])]
-        if len(mine):
-            rows.append({"robot": int(min(mine.index, key=lambda r: (-mine[r], r))), "role": role})
+        moved = steps[steps["role"] == role].groupby("robot")["length"].sum()
+        moved = moved[~moved.index.isin([row["robot"] for row in rows])]
+        if len(moved):
+            rows.append({"robot": int(min(moved.index, key=lambda r: (-moved[r], r))), "role": role})
     return pd.DataFrame(rows, columns=["robot", "role"]).astype({"robot": np.int64, "role": object})
 
 

@@ -38,7 +38,7 @@ ROLE_COLOURS = {"F_OUT": KEY_COLOURS["T"], "F_IN": KEY_COLOURS["N"], "R": KEY_CO
 ROLE_WORDS = {"F_OUT": "F_OUT (to T)", "F_IN": "F_IN (to N)", "R": "R (to recharge)"}
 BEACON, DEAD = OKABE_ITO["black"], OKABE_ITO["vermillion"]
 #: Every guidance vector and mobile robot's heading is drawn this long [m] (its magnitude: the shade).
-ARROW_M = 1.2
+ARROW_M = 0.8
 #: The time every time axis marks [min]: the thesis's network is at its largest then (L1103-L1105).
 MARK_MIN = 20.0
 #: Highlighted robots' paths (Figs 6-5, 6-6): colours that are none of the roles'.
@@ -114,7 +114,8 @@ def _arrows(ax, x, y, angle, **style) -> None:
 def _network(ax, snapshot: pandas.DataFrame, geometry: Any, v0: float) -> None:
     """One network snapshot (the rows of one label and time): the field, the beacons with a vector
     per key whose |v^X| > 0 (unit length, shaded by |v^X|, :func:`_key_colours`), the mobile
-    robots coloured by role (hollow while charging) with their heading, dead robots as crosses.
+    robots coloured by role (hollow while charging) with their heading (none while charging),
+    dead robots as crosses.
     A mobile robot's heading, not the guidance vector it follows: snapshots record vectors of
     beacons only (the heading is the vector it follows, as it turned at its last decision)."""
     _field(ax, geometry)
@@ -128,7 +129,7 @@ def _network(ax, snapshot: pandas.DataFrame, geometry: Any, v0: float) -> None:
             _arrows(ax, beacons["x"].to_numpy()[has], beacons["y"].to_numpy()[has], np.arctan2(vy[has], vx[has]),
                     color=_key_colours(key, v0).to_rgba(magnitude[has]), ec="0.2", lw=0.2, zorder=3)
     ax.plot(beacons["x"], beacons["y"], "o", ms=3.0, color=BEACON, zorder=4, ls="none")
-    mobile = alive[alive["role"].isin(list(ROLE_COLOURS))]
+    mobile = alive[alive["role"].isin(list(ROLE_COLOURS)) & (alive["mode"] != "charging")]   # charging: parked
     if len(mobile):
         _arrows(ax, mobile["x"].to_numpy(dtype=float), mobile["y"].to_numpy(dtype=float),
                 mobile["heading"].to_numpy(dtype=float), color=mobile["role"].map(ROLE_COLOURS).tolist(), ec="black",
@@ -158,9 +159,15 @@ def _network_legend(fig, axes, v0: float, paths: Sequence[str] = ()) -> None:
                 Line2D([], [], marker="x", ls="none", color=DEAD, ms=4.0, label="dead")]
     handles += [Line2D([], [], color=PATH_COLOURS[k], lw=1.4, label=text) for k, text in enumerate(paths)]
     fig.legend(handles=handles, loc="outside lower center", ncols=4, frameon=False)
-    for key in KEY_COLOURS:
-        fig.colorbar(_key_colours(key, v0), ax=axes, location="right", fraction=0.025, aspect=30, pad=0.01,
-                     label=f"vector to {key} [m/s]")
+    # the first bar added is the outermost: R first, so that they read T, N, R, the last one's ticks for all
+    for key in reversed(KEY_COLOURS):
+        bar = fig.colorbar(_key_colours(key, v0), ax=axes, location="right", fraction=0.012, aspect=25, shrink=0.8,
+                           pad=0.01)
+        bar.ax.set_title(key, fontsize=MIN_FONT_SIZE, color=KEY_COLOURS[key])
+        if key == "R":
+            bar.set_label("guidance vector magnitude [m/s]")
+        else:
+            bar.ax.tick_params(labelright=False)
 
 
 def _time_text(t: float) -> str:
@@ -228,18 +235,26 @@ def _condition_styles(conditions: Sequence[str]) -> dict[str, Style]:
     return styles(conditions, CONDITION_STYLES)
 
 
+def _se(rows: pandas.DataFrame, count: str) -> pandas.Series:
+    """The standard error of each mean of ``rows``: sd / sqrt(its ``count`` of values) (NaN for one).
+    The bands and whiskers show it, not the sd: the sd of these non-negative quantities reaches
+    below 0 where runs or trips differ much."""
+    return rows["sd"] / np.sqrt(rows[count])
+
+
 def _band(ax, rows: pandas.DataFrame, x: str, style: Style, label: str) -> None:
-    """A mean line (``rows`` sorted by ``x``) with a band of +- one sd (NaN sd: no band there)."""
+    """A mean line (``rows`` sorted by ``x``) with a band of +- its standard error (none where NaN)."""
     rows = rows.sort_values(x)
-    xs, mean, sd = (rows[c].to_numpy(dtype=float) for c in (x, "mean", "sd"))
-    ax.fill_between(xs, mean - sd, mean + sd, color=style.colour, alpha=0.18, lw=0)
+    xs, mean = (rows[c].to_numpy(dtype=float) for c in (x, "mean"))
+    se = _se(rows, "runs").to_numpy(dtype=float)
+    ax.fill_between(xs, mean - se, mean + se, color=style.colour, alpha=0.18, lw=0)
     ax.plot(xs, mean, ls=style.linestyle, color=style.colour, label=label)
 
 
 def _mark(ax) -> None:
     """The 20-minute line (:data:`MARK_MIN`) on a time axis in minutes, labelled at its top."""
     ax.axvline(MARK_MIN, color="0.35", lw=0.8, ls=":", zorder=1)
-    ax.text(MARK_MIN, 0.98, f" {MARK_MIN:g} min", transform=ax.get_xaxis_transform(), ha="left", va="top",
+    ax.text(MARK_MIN, 0.02, f" {MARK_MIN:g} min", transform=ax.get_xaxis_transform(), ha="left", va="bottom",
             color="0.35")
 
 
@@ -272,7 +287,7 @@ def _curve_panels(axes, curves: pandas.DataFrame, metrics: Sequence[str], condit
 def time_curves(curves: pandas.DataFrame, metrics: Sequence[str], conditions: Sequence[str],
                 path: str | os.PathLike, ncols: int = 3) -> list[Path]:
     """Figs 6-7 a-e, the alignment diagnostic: each of ``metrics`` against time, one band (mean
-    +- sd) per condition, panels lettered in ``metrics`` order. ``curves``: rows of one selection
+    +- standard error) per condition, panels lettered in ``metrics`` order. ``curves``: rows of one selection
     (:func:`dronefleet.lunar.experiments.curves`)."""
     nrows = -(-len(metrics) // ncols)
     with _figure(path, (DOUBLE_COLUMN, 2.3 * nrows + 0.5), PRINT_RC, nrows=nrows, ncols=ncols, squeeze=False) as \
@@ -287,7 +302,7 @@ def time_curves(curves: pandas.DataFrame, metrics: Sequence[str], conditions: Se
     return figure_paths(path)
 
 
-def _condition_legend(fig, ax, title: str = "mean +- sd over the runs") -> None:
+def _condition_legend(fig, ax, title: str = "mean +- standard error over the runs") -> None:
     handles, labels = ax.get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=min(6, len(labels)), frameon=False, title=title)
 
@@ -309,9 +324,8 @@ def placement(curves: pandas.DataFrame, path: str | os.PathLike) -> list[Path]:
 
 def trip_curves(bins: pandas.DataFrame, conditions: Sequence[str], bin_s: float, path: str | os.PathLike) -> list[Path]:
     """Fig 6-8 a-d: the R-T trips' SOC cost, energy, distance and time against the entry time,
-    the mean (a marker at each bin's middle) +- its standard error (sd / sqrt(trips); none for a
-    bin of one trip) per bin, one per condition. The standard error, not the sd: the sd of a few
-    trips reaches below 0 for these positive quantities."""
+    the mean (a marker at each bin's middle) +- its standard error (:func:`_se`; none for a bin
+    of one trip) per bin, one per condition."""
     mine_styles = _condition_styles(conditions)
     with _figure(path, (DOUBLE_COLUMN, 5.2), PRINT_RC, nrows=2, ncols=2, squeeze=False) as (mpl, fig, axes):
         for ax, metric in zip(axes.flat, ("soc_cost", "energy_wh", "length_m", "duration_s")):
@@ -321,8 +335,7 @@ def trip_curves(bins: pandas.DataFrame, conditions: Sequence[str], bin_s: float,
                     style = mine_styles[condition]
                     # side by side within each bin, so that the whiskers of the conditions stay apart
                     t = (rows["bin_start_s"] + bin_s / 2 + _dodge(k, len(conditions), 0.12 * bin_s)) / 60.0
-                    se = rows["sd"] / np.sqrt(rows["trips"])
-                    ax.errorbar(t, rows["mean"], yerr=se, ls=style.linestyle, marker=style.marker,
+                    ax.errorbar(t, rows["mean"], yerr=_se(rows, "trips"), ls=style.linestyle, marker=style.marker,
                                 color=style.colour, capsize=1.5, elinewidth=0.6, label=condition)
             ax.set_ylabel(METRIC_WORDS[metric])
             ax.set_xlabel(f"entry time [min] ({bin_s / 60.0:g}-min bins)")
@@ -337,7 +350,7 @@ def trip_curves(bins: pandas.DataFrame, conditions: Sequence[str], bin_s: float,
 def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence[str],
             path: str | os.PathLike) -> list[Path]:
     """The eps = 1 control (section 14): (a) resources returned against time per layout, with the
-    guidance network (solid) and without (eps = 1, dashed); (b) F(T_run) of each, mean +- sd,
+    guidance network (solid) and without (eps = 1, dashed); (b) F(T_run) of each, mean +- standard error,
     with the share the control keeps written over its bar, on (a)'s y-scale (one quantity).
     ``stats``: run_stats rows of one selection; conditions named "<layout>" and "<layout> eps=1"."""
     from matplotlib.patches import Patch
@@ -363,8 +376,8 @@ def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence
             for offset, condition, fill in ((-0.2, layout, True), (0.2, f"{layout} eps=1", False)):
                 if condition not in final.index:
                     continue
-                mean, sd = final.loc[condition, ["mean", "sd"]]
-                bars.bar(k + offset, mean, 0.38, yerr=sd, color=colour if fill else "white",
+                bars.bar(k + offset, final.loc[condition, "mean"], 0.38, yerr=_se(final.loc[[condition]], "runs"),
+                         color=colour if fill else "white",
                          hatch="" if fill else "///", ec=colour, lw=0.8, error_kw={"lw": 0.8, "ecolor": "black"})
             if layout in final.index and f"{layout} eps=1" in final.index and final.loc[layout, "mean"] > 0:
                 share = final.loc[f"{layout} eps=1", "mean"] / final.loc[layout, "mean"]
@@ -374,8 +387,8 @@ def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence
         bars.set_ylabel("resources returned by the end [units]")
         bars.yaxis.set_tick_params(labelleft=True)
         bars.legend(handles=[Patch(fc="0.4", ec="0.4", label="network"),
-                             Patch(fc="white", ec="0.4", hatch="///", label=WITHOUT)], loc="upper right",
-                    frameon=False)
+                             Patch(fc="white", ec="0.4", hatch="///", label=WITHOUT)], loc="upper center",
+                    bbox_to_anchor=(0.5, -0.1), ncols=2, frameon=False)
         bars.grid(alpha=0.3, axis="y")
         letter_panels([ax, bars])
     return figure_paths(path)

@@ -51,10 +51,11 @@ QUICK = (f"{QUICK_CHANGES['runs']} runs of {QUICK_CHANGES['duration_s']:g} s per
 E0 = {"layout": "SOFT-RT", "runs": 1, "first_run": 0, "frames": True, "frame_every_s": 0.64}
 #: The snapshot labels each E0 figure draws (Fig 6-4's panels in order).
 E0_LABELS = {"lunar-fig03": ("end",), "lunar-fig04": ("first_T", "first_R", "first_row5")}
-#: Figs 6-5 and 6-6: the time of the snapshot as a fraction of T_run, and the window of the paths [s]
-#: (about 75 m of driving at v0: a longer one is a tangle of paths criss-crossing the field).
+#: Figs 6-5 and 6-6: the time of the snapshot as a fraction of T_run (at most: :func:`_exploitation_time`),
+#: and the window of the paths [s]
+#: (about 37 m of driving at v0, three times across the field: a longer one is a tangle of paths).
 E0_EXPLOITATION = {"lunar-fig05": 0.5, "lunar-fig06": 1.0}
-PATH_WINDOW_S = 60.0
+PATH_WINDOW_S = 30.0
 #: Per figure: experiment -> the conditions it draws of it (None: all of the sweep's).
 SOURCES: dict[str, dict[str, tuple[str, ...] | None]] = {
     "lunar-fig07": {"e1": None},
@@ -205,9 +206,24 @@ def _e0_snapshots(snapshots: pd.DataFrame, figure: str) -> pd.DataFrame:
 
 
 def _exploitation_time(frames: pd.DataFrame, figure: str) -> float:
-    """The frame time of Fig 6-5 / 6-6: the last frame at or before the figure's share of the run."""
+    """The frame time of Fig 6-5 / 6-6: the last frame at or before the figure's share of the run
+    whose window (:data:`PATH_WINDOW_S`) shows a robot driving in each highlighted role, as the
+    thesis's does (L1061; robots recharge for minutes, so a window may hold none in role R);
+    without one, the last frame at or before the share."""
     times = np.sort(frames["t"].unique())
-    return float(times[times <= E0_EXPLOITATION[figure] * times[-1] + 1e-9][-1])
+    ends = times[times <= E0_EXPLOITATION[figure] * times[-1] + 1e-9]
+    steps = experiments.drives(frames).sort_values("t_to", kind="mergesort")
+    shown = np.ones(len(ends), dtype=bool)
+    for role in experiments.HIGHLIGHTED_ROLES:
+        mine = steps[steps["role"] == role]
+        if not len(mine):
+            shown[:] = False
+            continue
+        # per end: the latest start of a step of this role that ended by then (a running maximum)
+        latest = np.maximum.accumulate(mine["t_from"].to_numpy())
+        last = np.searchsorted(mine["t_to"].to_numpy(), ends + 1e-9, side="right") - 1
+        shown &= (last >= 0) & (latest[np.maximum(last, 0)] > ends - PATH_WINDOW_S - 1e-9)
+    return float(ends[shown][-1] if shown.any() else ends[-1])
 
 
 def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
@@ -296,7 +312,7 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
             return figures.snapshot(snapshots, geometry, v0, d / figure)
         if figure == "lunar-fig04":
             words = {"first_T": "first entry into T", "first_R": "first entry into R",
-                     "first_row5": "first recharged robot heads to N"}  # row 5: no path to R yet
+                     "first_row5": "first recharged robot\nheads to N"}  # row 5: no path to R yet
             found = {words[label]: (snapshots[snapshots["label"] == label] if (snapshots["label"] == label).any()
                                     else None) for label in E0_LABELS[figure]}
             return figures.panels(found, geometry, v0, d / figure)

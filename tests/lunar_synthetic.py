@@ -127,7 +127,8 @@ def _snapshots(params, runs):
     labels += [("periodic", t) for t in np.arange(params.snapshot_every_s, params.duration_s + 1e-9,
                                                   params.snapshot_every_s)]
     if params.frames:
-        labels += [("frame", t) for t in record_times(params)]
+        every = params.frame_every_ticks   # every n_T ticks, or frame_every_s
+        labels += [("frame", t) for t in np.arange(every, params.ticks + 1, every) * params.tau]
     cols = {name: [] for name in ("run", "label", "t", "robot", "status", "role", "mode", "x", "y", "heading", "soc",
                                   "load", *(f"{n}_{k}" for n in ("omega", "vx", "vy", "S") for k in KEYS))}
     for r in runs:

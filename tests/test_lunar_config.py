@@ -197,6 +197,12 @@ def test_hostile_set_values_are_refused_in_one_line_and_nothing_is_written(tmp_p
     (["soc0=0.8", "soc0_low=0.8"], ()),
     (["soc0_low=0.8"], ()),
     (["energy_scale=0.001", "depletion=recorded", "experience=leaving"], ()),
+    # a frame every tick: 56,267 snapshots of 50 robots in one run
+    (["runs=1", "frames=true", "frame_every_s=0.064"],
+     ("snapshot-rows", "runs 1 x 50 robots x 56,267 snapshots", "raise snapshot_every_s or frame_every_s")),
+    (["runs=1", "frames=true", "frame_every_s=0.01"], ("records.frame_every_s = 0.01 s is shorter than one tick",)),
+    (["frame_every_s=0.64"], ("records.frame_every_s = 0.64 s", "records.frames = false records none")),
+    (["runs=1", "frames=true", "frame_every_s=0.64"], ()),  # E0's
 ])
 def test_runs_too_large_or_undefined_are_refused_before_any_work(overrides, fragments):
     if not fragments:

@@ -162,12 +162,38 @@ def test_run_stats_leave_out_nan_deaths_per_session():
     assert row["runs"].item() == 6   # runs 0 and 4 had no session
 
 
-def test_the_highlighted_robots_travelled_farthest_while_mobile():
-    frames = pd.DataFrame({"robot": [0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3], "t": [10.0, 20.0, 30.0] * 4,
-                           "x": [0, 5, 5, 0, 1, 2, 0, 9, 9, 0, 3, 6], "y": [0.0] * 12,
-                           "status": ["alive"] * 12, "role": ["F_OUT"] * 6 + ["B"] * 3 + ["R"] * 3})
-    assert experiments.highlighted(frames, 30.0, 300.0) == [3, 0, 1]   # robot 2 is a beacon
-    assert experiments.highlighted(frames, 30.0, 15.0) == [3, 1]       # robot 0 did not move in (15, 30]
+def test_the_highlighted_robots_are_one_per_role_that_travelled_farthest_while_mobile():
+    frames = pd.DataFrame({"robot": [0, 0, 0, 1, 1, 1, 2, 2, 2, 3, 3, 3, 4, 4, 4], "t": [10.0, 20.0, 30.0] * 5,
+                           "x": [0, 5, 5, 0, 1, 2, 0, 9, 9, 0, 3, 6, 0, 9, 18], "y": [0.0] * 15,
+                           "status": ["alive"] * 15,
+                           "role": ["F_OUT"] * 6 + ["B"] * 3 + ["R"] * 3 + ["F_IN", "F_IN", "B"]})
+
+    def picked(window):
+        return experiments.highlighted(frames, 30.0, window).to_dict("records")
+
+    # robot 2 is a beacon; robot 4 drove 9 m as F_IN, then became one (its last 9 m do not count);
+    # roles in the thesis's order (out, in, recharge)
+    assert picked(300.0) == [{"robot": 0, "role": "F_OUT"}, {"robot": 4, "role": "F_IN"}, {"robot": 3, "role": "R"}]
+    assert picked(15.0) == [{"robot": 1, "role": "F_OUT"}, {"robot": 3, "role": "R"}]   # robot 0 still in (15, 30]
+
+
+def test_the_exploitation_snapshot_is_the_last_whose_window_shows_every_role_driving(monkeypatch):
+    times = np.arange(10.0, 201.0, 10.0)
+
+    def frames(r_stops):
+        # robots 0, 1, 2 drive as F_OUT, F_IN, R; robot 2 stands still (charging) from r_stops on
+        rows = [{"robot": robot, "t": t, "status": "alive", "role": role, "y": 0.0,
+                 "x": min(t, r_stops) if robot == 2 else t}
+                for robot, role in enumerate(("F_OUT", "F_IN", "R")) for t in times]
+        return pd.DataFrame(rows)
+
+    monkeypatch.setattr(study, "PATH_WINDOW_S", 60.0)
+    # half of the run (100 s) shows robot 2 standing: the last end whose window holds its step 20 -> 30 s
+    # is 80 (the frames of the window: 20 s .. 80 s)
+    assert study._exploitation_time(frames(30.0), "lunar-fig05") == 80.0
+    assert study._exploitation_time(frames(30.0), "lunar-fig06") == 80.0
+    assert study._exploitation_time(frames(500.0), "lunar-fig06") == 200.0
+    assert study._exploitation_time(frames(10.0), "lunar-fig05") == 100.0   # never drives: half of the run
 
 
 def test_chunks_cover_the_configurations_runs():
@@ -328,27 +354,175 @@ def test_the_synthetic_tables_have_the_simulators_columns_and_types():
         assert tables[name].schema.equals(schema), name
 
 
-def test_a_milestone_the_run_never_reached_is_an_empty_field_saying_so(tmp_path):
+@pytest.fixture
+def kept(monkeypatch):
+    """The figures the lunar figure functions draw from here on (a list), kept after they are saved."""
+    from dronefleet.lunar import figures
+
+    kept, original = [], figures._figure
+
+    @contextmanager
+    def keeping(path, *args, **kwargs):
+        with original(path, *args, **kwargs) as (mpl, fig, axes):
+            kept.append(fig)
+            yield mpl, fig, axes
+    monkeypatch.setattr(figures, "_figure", keeping)
+    return kept
+
+
+def test_a_milestone_the_run_never_reached_is_an_empty_field_saying_so(tmp_path, kept):
     from dronefleet.lunar import figures
     from dronefleet.lunar.layout import build
 
     params = LunarParams(runs=1, duration_s=60.0)
     snapshots = synthetic.simulate(params)["snapshots"].to_pandas()
-    kept = {}
-    original = figures._figure
-
-    @contextmanager
-    def keeping(path, *args, **kwargs):
-        with original(path, *args, **kwargs) as (mpl, fig, axes):
-            kept["fig"] = fig
-            yield mpl, fig, axes
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(figures, "_figure", keeping)
-        files = figures.panels({"first entry into T": snapshots[snapshots["label"] == "first_T"],
-                                "first row 5": None}, build(params), params.v0, tmp_path / "milestones")
+    files = figures.panels({"first entry into T": snapshots[snapshots["label"] == "first_T"],
+                            "first recharged robot heads to N": None}, build(params), params.v0, tmp_path / "milestones")
     assert [path.name for path in files] == ["milestones.png", "milestones.pdf", "milestones.svg"]
-    texts = [text.get_text() for ax in kept["fig"].axes for text in ax.texts]
+    texts = [text.get_text() for ax in kept[0].axes for text in ax.texts]
     assert "not reached in this run" in texts
+
+
+def test_a_trip_entering_at_the_end_of_the_run_is_in_the_last_bin_not_one_after_it():
+    tau, bin_s = LunarParams().tau, experiments.BIN_S
+    # entries at ticks 1, 4688 (300.03 s), 4687 (299.97 s) and 56250 (T_run = 3600 s, as tick * tau rounds it)
+    ticks = [1, 4687, 4688, 56_250]
+    trips = pd.DataFrame({"condition": "SOFT-RT", "run": 0, "origin": "R", "dest": "T", "tick_entered": ticks,
+                          **{metric: [1.0, 2.0, 3.0, 4.0] for metric in experiments.TRIP_METRICS}})
+    trips = experiments.rt_trips(trips, tau)
+    bins = experiments.trip_bins(trips, pd.DataFrame({"condition": ["SOFT-RT"], "run": [0], "resources": [1]}), bin_s)
+    length = bins[(bins["metric"] == "length_m") & (bins["selection"] == "all")]
+    assert dict(zip(length["bin_start_s"], length["mean"])) == {0.0: 1.5, 300.0: 3.0, 3300.0: 4.0}
+    assert length["bin_start_s"].max() + bin_s == 3600.0   # the last bin closes at T_run
+
+
+def _draw(context, figure, kept):
+    """``figure`` drawn again from ``context``'s tables: its matplotlib figures."""
+    del kept[:]
+    study.draw(context, figure)
+    return list(kept)
+
+
+def test_fig08_whiskers_are_standard_errors_and_say_so(synthetic_results, kept):
+    context, _ = synthetic_results
+    (fig,) = _draw(context, "lunar-fig08", kept)
+    bins = pd.read_parquet(context.root / "lunar-fig08" / "bins.parquet")
+    bins = bins[(bins["selection"] == "selected") & (bins["metric"] == "soc_cost")]
+    ax = fig.axes[0]
+    assert ax.containers, "no whiskers drawn"
+    for container in ax.containers:
+        rows = bins[bins["condition"] == container.get_label()].sort_values("bin_start_s")
+        (bars,) = container.lines[2]
+        half = np.array([abs(segment[1, 1] - segment[0, 1]) / 2 for segment in bars.get_segments()])
+        assert np.allclose(half, (rows["sd"] / np.sqrt(rows["trips"])).dropna().to_numpy()), container.get_label()
+    assert "standard error" in fig.legends[0].get_title().get_text()
+    curves, _ = _draw(context, "lunar-fig07", kept)   # the bands of the curves too
+    assert "standard error" in curves.legends[0].get_title().get_text()
+
+
+def _time_axes(fig):
+    return [ax for ax in fig.axes if "time [min]" in ax.get_xlabel()]
+
+
+@pytest.mark.parametrize("figure, count", [("lunar-fig07", 5 + 3), ("lunar-fig08", 4), ("lunar-fig11", 6),
+                                           ("lunar-control", 1)])
+def test_every_time_axis_marks_20_minutes_with_a_label(synthetic_results, kept, figure, count):
+    context, _ = synthetic_results
+    axes = [ax for fig in _draw(context, figure, kept) for ax in _time_axes(fig)]
+    assert len(axes) == count
+    for ax in axes:
+        assert any(list(line.get_xdata()) == [20.0, 20.0] for line in ax.lines), ax.get_ylabel()
+        assert any(text.get_text().strip() == "20 min" and text.get_position()[0] == 20.0 for text in ax.texts)
+
+
+def test_panels_of_one_quantity_share_their_y_scale(synthetic_results, kept):
+    context, _ = synthetic_results
+    _, alignment = _draw(context, "lunar-fig07", kept)
+    assert len({ax.get_ylim() for ax in alignment.axes if ax.get_visible()}) == 1
+    (placement,) = _draw(context, "lunar-fig11", kept)
+    rows = {}
+    for ax in placement.axes:
+        rows.setdefault(ax.get_ylabel(), set()).add(ax.get_ylim())
+    assert len(rows) == 3 and all(len(limits) == 1 for limits in rows.values())   # soft and hard alike
+    (control,) = _draw(context, "lunar-control", kept)
+    curves, bars = control.axes[:2]
+    assert curves.get_ylim() == bars.get_ylim()   # resources returned, over time and at the end
+
+
+#: Spec and code words a figure must not show: the labels are words.
+JARGON = re.compile(r"row ?5|n_T|T_run|_row5|first_|eps=1")
+
+
+@pytest.mark.parametrize("figure", study.FIGURES)
+def test_no_figure_text_is_spec_jargon(synthetic_results, kept, figure):
+    from matplotlib.text import Text
+
+    context, _ = synthetic_results
+    texts = [text.get_text() for fig in _draw(context, figure, kept) for text in fig.findobj(Text)]
+    assert texts and not [text for text in texts if JARGON.search(text)], figure
+
+
+def _quivers(ax):
+    from matplotlib.quiver import Quiver
+
+    return [artist for artist in ax.collections if isinstance(artist, Quiver)]
+
+
+def test_guidance_vectors_are_arrows_of_one_length_shaded_by_magnitude(synthetic_results, kept):
+    from dronefleet.lunar import figures
+
+    context, _ = synthetic_results
+    (fig,) = _draw(context, "lunar-fig04", kept)
+    snapshots = pd.read_parquet(context.root / "lunar-fig04" / "snapshots.parquet")
+    first = snapshots[(snapshots["label"] == "first_T") & (snapshots["role"] == "B")]
+    vectors = _quivers(fig.axes[0])[:3]     # the keys T, N, R, then the mobile robots' headings
+    for key, quiver in zip(figures.KEY_COLOURS, vectors):
+        assert np.allclose(np.hypot(quiver.U, quiver.V), figures.ARROW_M), key
+        magnitude = np.hypot(first[f"vx_{key}"], first[f"vy_{key}"]).to_numpy()
+        magnitude = magnitude[magnitude > 0]
+        shades = quiver.get_facecolors()
+        strongest, weakest = np.argmax(magnitude), np.argmin(magnitude)
+        if magnitude[strongest] > magnitude[weakest]:   # the stronger vector is the darker shade
+            assert shades[strongest][:3].sum() < shades[weakest][:3].sum(), key
+    bars = [ax for ax in fig.axes if ax.get_title() in figures.KEY_COLOURS]   # a colour bar per key
+    assert sorted(ax.get_title() for ax in bars) == ["N", "R", "T"]
+    assert "guidance vector magnitude [m/s]" in {ax.get_ylabel() for ax in bars}
+
+
+def test_mobile_robots_are_drawn_with_their_heading(synthetic_results, kept):
+    from dronefleet.lunar import figures
+
+    context, _ = synthetic_results
+    (fig,) = _draw(context, "lunar-fig03", kept)
+    rows = pd.read_parquet(context.root / "lunar-fig03" / "snapshots.parquet")
+    mobile = rows[(rows["status"] == "alive") & (rows["role"] != "B") & (rows["mode"] != "charging")]
+    (headings,) = [q for q in _quivers(fig.axes[0]) if q.N == len(mobile)]
+    assert np.allclose(np.arctan2(headings.V, headings.U), mobile["heading"])
+    assert np.allclose(np.hypot(headings.U, headings.V), figures.ARROW_M)
+
+
+def test_frames_are_recorded_every_frame_every_s_and_every_n_t_without_it():
+    from dronefleet.lunar.simulate import simulate
+
+    def frame_ticks(**changes):
+        params = LunarParams(runs=1, n_robots=4, duration_s=25.0, frames=True, **changes)
+        snapshots = simulate(params)["snapshots"].to_pandas()
+        times = np.sort(snapshots.loc[snapshots["label"] == "frame", "t"].unique())
+        return np.round(times / params.tau).astype(int).tolist(), params.n_T
+
+    ticks, n_t = frame_ticks()
+    assert ticks == list(range(n_t, 390 + 1, n_t))   # the default: every n_T = 156 ticks, as before
+    ticks, _ = frame_ticks(frame_every_s=0.32)
+    assert ticks == list(range(5, 390 + 1, 5))       # 0.32 s = 5 ticks
+
+
+def test_e0_paths_follow_one_robot_per_role(synthetic_results):
+    context, _ = synthetic_results
+    for figure in ("lunar-fig05", "lunar-fig06"):
+        highlighted = pd.read_parquet(context.root / figure / "highlighted.parquet")
+        assert highlighted["role"].tolist() == list(experiments.HIGHLIGHTED_ROLES), figure
+        frames = pd.read_parquet(context.root / figure / "snapshots.parquet")
+        assert np.allclose(np.diff(np.sort(frames["t"].unique())), study.E0["frame_every_s"])
 
 
 

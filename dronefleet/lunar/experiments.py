@@ -30,8 +30,8 @@ from ..config import SweepError, shipped_config
 
 __all__ = ["EXPERIMENTS", "CONDITION_COLUMNS", "CURVE_METRICS", "TRIP_METRICS", "RUN_STATS", "BIN_S", "SELECTED",
            "OUT_OF", "CHUNK_RUNS", "grid_path", "condition_of", "condition_row", "selected_count", "selected",
-           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "highlighted", "chunks", "run_chunks",
-           "run_configs"]
+           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "drives", "highlighted",
+           "chunks", "run_chunks", "run_configs"]
 
 #: The experiments with a sweep file, ``configs/sweeps/lunar-<name>.toml`` (section 14).
 EXPERIMENTS = ("e1", "e2", "e3", "eps1")
@@ -141,12 +141,15 @@ def trip_bins(trips: pd.DataFrame, summary: pd.DataFrame, bin_s: float = BIN_S) 
     pooled over the selected runs (and over all runs) per ``bin_s`` bin of their entry time.
 
     Returns one row per (condition, selection, metric, bin): ``condition``, ``selection``,
-    ``metric``, ``bin_start_s`` [s] (entry times in [bin_start_s, bin_start_s + bin_s)), ``mean``,
-    ``sd``, ``trips``.
+    ``metric``, ``bin_start_s`` [s] (entry times in (bin_start_s, bin_start_s + bin_s]: closed on
+    the right, so that a trip entering at T_run falls in the bin that ends there, not a bin of its
+    own after the run; entries are at tick 1 or later, never at 0), ``mean``, ``sd``, ``trips``.
     """
     frames = []
     for selection, rows in _selections(trips, summary):
-        rows = rows.assign(bin_start_s=np.floor(rows["t_entered"].to_numpy() / bin_s) * bin_s)
+        # 1e-9: an entry at a bin's end (tick * tau rounded up by a few ulps) stays in that bin
+        ends = np.maximum(np.ceil(rows["t_entered"].to_numpy() / bin_s - 1e-9), 1.0)
+        rows = rows.assign(bin_start_s=(ends - 1.0) * bin_s)
         long = rows.melt(id_vars=["condition", "bin_start_s"], value_vars=list(TRIP_METRICS), var_name="metric")
         long["value"] = long["value"].astype(np.float64)
         stats = _stats(long.groupby(["condition", "metric", "bin_start_s"], sort=True), "value", "trips")
@@ -186,20 +189,39 @@ def run_stats(summary: pd.DataFrame, columns: Iterable[str] = RUN_STATS) -> pd.D
     return pd.concat(frames, ignore_index=True)[["condition", "selection", "column", "mean", "sd", "runs"]]
 
 
-def highlighted(frames: pd.DataFrame, t_end: float, window_s: float, count: int = 3) -> list[int]:
-    """Figs 6-5, 6-6: the ``count`` robots that travelled farthest while mobile over the frames of
-    (t_end - window_s, t_end]: the summed straight distance between consecutive frames of the
-    window in which the robot is alive and in a mobile role at both ends (ties: the lower id).
-    ``frames``: the snapshot rows labelled "frame" of one run."""
-    window = frames[(frames["t"] > t_end - window_s - 1e-9) & (frames["t"] <= t_end + 1e-9)]
-    window = window.sort_values(["robot", "t"], kind="mergesort")
-    mobile = ((window["status"] == "alive") & (window["role"] != "B")).to_numpy()
-    robot, x, y = (window[c].to_numpy() for c in ("robot", "x", "y"))
-    step = (robot[1:] == robot[:-1]) & mobile[1:] & mobile[:-1]
-    moved = pd.Series(np.where(step, np.hypot(np.diff(x), np.diff(y)), 0.0)).groupby(robot[1:]).sum()
-    moved = moved[moved > 0]
-    order = sorted(moved.items(), key=lambda item: (-item[1], item[0]))
-    return [int(r) for r, _ in order[:count]]
+#: The roles Figs 6-5 and 6-6 highlight one robot of, in order: the thesis's three robots are an
+#: outbound one, an inbound one and one on its way to recharge (L1061).
+HIGHLIGHTED_ROLES = ("F_OUT", "F_IN", "R")
+
+
+def drives(frames: pd.DataFrame) -> pd.DataFrame:
+    """The steps between consecutive frames of each robot (``frames``: the snapshot rows labelled
+    "frame" of one run) in which it is alive and in one role at both ends and moved: ``robot``,
+    ``role``, ``t_from``, ``t_to`` [s], ``length`` [m] (straight)."""
+    rows = frames.sort_values(["robot", "t"], kind="mergesort")
+    alive = (rows["status"] == "alive").to_numpy()
+    robot, role, t, x, y = (rows[c].to_numpy() for c in ("robot", "role", "t", "x", "y"))
+    length = np.hypot(np.diff(x), np.diff(y))
+    keep = (robot[1:] == robot[:-1]) & alive[1:] & alive[:-1] & (role[1:] == role[:-1]) & (length > 0)
+    return pd.DataFrame({"robot": robot[1:][keep], "role": role[1:][keep], "t_from": t[:-1][keep],
+                         "t_to": t[1:][keep], "length": length[keep]})
+
+
+def highlighted(frames: pd.DataFrame, t_end: float, window_s: float) -> pd.DataFrame:
+    """Figs 6-5, 6-6: per role of :data:`HIGHLIGHTED_ROLES`, the robot that drove farthest in
+    that role over the frames of (t_end - window_s, t_end] (:func:`drives` within it; ties: the
+    lower id; a robot is highlighted once, for the first role it leads; a role no robot drove in
+    is left out). ``frames``: the snapshot rows labelled "frame" of one run. Returns ``robot``,
+    ``role`` rows in role order."""
+    steps = drives(frames)
+    steps = steps[(steps["t_from"] > t_end - window_s - 1e-9) & (steps["t_to"] <= t_end + 1e-9)]
+    rows = []
+    for role in HIGHLIGHTED_ROLES:
+        moved = steps[steps["role"] == role].groupby("robot")["length"].sum()
+        moved = moved[~moved.index.isin([row["robot"] for row in rows])]
+        if len(moved):
+            rows.append({"robot": int(min(moved.index, key=lambda r: (-moved[r], r))), "role": role})
+    return pd.DataFrame(rows, columns=["robot", "role"]).astype({"robot": np.int64, "role": object})
 
 
 def chunks(config: Any, size: int = CHUNK_RUNS) -> list[Any]:

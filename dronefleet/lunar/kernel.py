@@ -1080,7 +1080,7 @@ def records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_
     n_t = opts[O_NT]
     rate_w = opts[O_RATE_W]
     snap_every = opts[O_SNAP_EVERY]
-    frames = opts[O_FRAMES] != 0
+    frame_every = opts[O_FRAMES]
     e_cap = pars[P_ECAP]
     soc0 = pars[P_SOC0]
     n_rec = n_ticks // n_t
@@ -1147,7 +1147,7 @@ def records(opts, pars, g, k, run, run_id, spawned, status, role, role_k1, role_
     if k % snap_every == 0:
         n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_PERIODIC, k, n, status, role, mode, x,
                                    y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
-    if frames and k % n_t == 0:
+    if frame_every > 0 and k % frame_every == 0:
         n_snaps = _snapshot(snaps, n_snaps, run_id, LABEL_FRAME, k, n, status, role, mode, x,
                                    y, theta, energy, e_cap, load, omega, bvx, bvy, bsoc)
     if k == n_ticks:

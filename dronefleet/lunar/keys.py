@@ -99,6 +99,8 @@ KEYS: dict[str, Key] = {
     "snapshot_every_s": Key("records", "s", float, 0.001, 86_400.0, "interval of the periodic network snapshots "
                             "(section 19)"),
     "frames": Key("records", "-", bool, None, None, "also a snapshot (\"frame\") every n_T ticks, for the replay page"),
+    "frame_every_s": Key("records", "s", float, 0.0, 86_400.0, "with frames: their interval, 0 = every n_T ticks "
+                         "(shorter: smoother paths, Figs 6-5, 6-6)"),
     # options of section 17
     "avoidance": _word("options", "A28: offset from the plan while an obstacle is sensed, or the earlier "
                        "reading (the turn becomes the plan)", "avoidance"),
@@ -186,9 +188,9 @@ def check(name: str, value: Any) -> Any:
 
 def snapshots_per_run(params: LunarParams) -> int:
     """Most snapshots a run records: the milestones, one every ``snapshot_every_s`` and, with
-    ``frames``, one every n_T ticks."""
+    ``frames``, one every n_T ticks (or every ``frame_every_s``)."""
     count = MILESTONES + params.ticks // params.snapshot_every_ticks
-    return count + (params.ticks // params.n_T + 1 if params.frames else 0)
+    return count + (params.ticks // params.frame_every_ticks + 1 if params.frames else 0)
 
 
 def region_gap(params: LunarParams) -> float:
@@ -220,8 +222,9 @@ _LIMIT_FIXES = {"robot_ticks": (("runs", "duration_s", "tau", "n_robots"), "lowe
                                     "lower runs, duration_s or n_robots, or set los_bodies = false"),
                 "records": (("runs", "duration_s", "tau", "update_interval_s"),
                             "lower runs or duration_s, or raise update_interval_s"),
-                "snapshot_rows": (("runs", "n_robots", "snapshot_every_s", "frames"),
-                                  "lower runs or n_robots, raise snapshot_every_s, or set frames = false"),
+                "snapshot_rows": (("runs", "n_robots", "snapshot_every_s", "frames", "frame_every_s"),
+                                  "lower runs or n_robots, raise snapshot_every_s or frame_every_s, or set "
+                                  "frames = false"),
                 "trip_rows": (("runs", "n_robots", "duration_s", "v0", "layout_scale"),
                               "lower runs, n_robots, duration_s or v0")}
 
@@ -241,10 +244,15 @@ def validate(params: LunarParams) -> None:
     """The rules between values and the size of the run; ConfigError (one line) naming the keys."""
     p = params
     for name, interval in (("duration_s", p.duration_s), ("update_interval_s", p.update_interval_s),
-                           ("rate_window_s", p.rate_window_s), ("snapshot_every_s", p.snapshot_every_s)):
+                           ("rate_window_s", p.rate_window_s), ("snapshot_every_s", p.snapshot_every_s),
+                           ("frame_every_s", p.frame_every_s or p.tau)):  # 0: every n_T ticks
         if math.floor(interval / p.tau + 1e-9) < 1:
             raise ConfigError(f"{KEYS[name].section}.{name} = {interval:g} s is shorter than one tick "
                               f"(run.tau = {p.tau:g} s): it must hold at least one", (name, "tau"))
+    if p.frame_every_s > 0 and not p.frames:
+        raise ConfigError(f"records.frame_every_s = {p.frame_every_s:g} s sets the interval of the frames, but "
+                          "records.frames = false records none: set frames = true or frame_every_s = 0",
+                          ("frame_every_s", "frames"))
     if p.v0 * p.tau > p.r_body:
         raise ConfigError(f"a tick's step v0 * tau = {p.v0:g} * {p.tau:g} = {p.v0 * p.tau:g} m is longer than "
                           f"robots.r_body = {p.r_body:g} m: robots would jump through each other and obstacle "

@@ -121,7 +121,9 @@ class LunarParams:
     snapshot_every_s: float = 300.0
     """Interval of the periodic network snapshots [s] (section 19)."""
     frames: bool = False
-    """Record a snapshot ("frame") every n_T ticks for the replay [-]."""
+    """Record a snapshot ("frame") every n_T ticks (or every ``frame_every_s``) for the replay [-]."""
+    frame_every_s: float = 0.0
+    """Interval of the frames [s]; 0: every n_T ticks (paths between frames are straight strokes)."""
     # options of section 17
     avoidance: str = "offset"
     """A28: "offset" (deviation from the plan while sensed) or "turn" (the turn becomes the plan)."""
@@ -170,3 +172,8 @@ class LunarParams:
     def snapshot_every_ticks(self) -> int:
         """Periodic snapshot interval in ticks: floor(snapshot_every_s / tau + 1e-9)."""
         return math.floor(self.snapshot_every_s / self.tau + 1e-9)
+
+    @property
+    def frame_every_ticks(self) -> int:
+        """Frame interval in ticks: n_T when ``frame_every_s`` is 0, else floor(frame_every_s / tau + 1e-9)."""
+        return self.n_T if self.frame_every_s == 0 else math.floor(self.frame_every_s / self.tau + 1e-9)

@@ -34,8 +34,8 @@ KEYS = ("T", "N", "R")
 
 
 def _frames(config) -> int:
-    """Frames of a run of ``config``: one every n_T ticks from tick 0 to the end, at most."""
-    return config.ticks // config.n_T + 1
+    """Frames of a run of ``config``: one every n_T ticks (or ``frame_every_s``) from tick 0 to the end, at most."""
+    return config.ticks // config.frame_every_ticks + 1
 
 
 def _too_large(config) -> str | None:

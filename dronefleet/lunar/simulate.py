@@ -106,7 +106,7 @@ def kernel_inputs(params: LunarParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     opts[k.O_ROBOTS], opts[k.O_TICKS], opts[k.O_NT] = p.n_robots, p.ticks, p.n_T
     opts[k.O_RMAX], opts[k.O_BLOCKED] = p.r_max, p.blocked_ticks
     opts[k.O_RATE_W], opts[k.O_SNAP_EVERY] = p.rate_window_ticks, max(1, p.snapshot_every_ticks)
-    opts[k.O_FRAMES] = p.frames
+    opts[k.O_FRAMES] = p.frame_every_ticks if p.frames else 0   # frame interval [ticks], 0: none
     opts[k.O_AVOID_TURN] = p.avoidance == "turn"
     opts[k.O_BCAST_MOTION] = p.broadcast_velocity == "motion"
     opts[k.O_BCAST_UPDATE] = p.broadcast == "update"

@@ -45,14 +45,17 @@ FIGURES = (*E0_FIGURES, "lunar-fig07", "lunar-fig08", "lunar-fig09", "lunar-fig1
 QUICK_CHANGES = {"runs": 5, "duration_s": 600.0}
 QUICK = (f"{QUICK_CHANGES['runs']} runs of {QUICK_CHANGES['duration_s']:g} s per condition "
          f"(the {experiments.selected_count(QUICK_CHANGES['runs'])} with most resources kept)")
-#: E0 (section 14): one SOFT-RT run at the defaults, a frame every n_T (Figs 6-3 to 6-6).
-E0 = {"layout": "SOFT-RT", "runs": 1, "first_run": 0, "frames": True}
+#: E0 (section 14): one SOFT-RT run at the defaults with frames (Figs 6-3 to 6-6), one every 10 ticks
+#: (0.8 m of driving: the paths of Figs 6-5, 6-6 follow the robots' turns). Every tick would be 2.8e6
+#: snapshot rows, beyond the limit (keys.RUN_LIMITS); this is 2.8e5.
+E0 = {"layout": "SOFT-RT", "runs": 1, "first_run": 0, "frames": True, "frame_every_s": 0.64}
 #: The snapshot labels each E0 figure draws (Fig 6-4's panels in order).
 E0_LABELS = {"lunar-fig03": ("end",), "lunar-fig04": ("first_T", "first_R", "first_row5")}
-#: Figs 6-5 and 6-6: the time of the snapshot as a fraction of T_run, and the window of the paths [s]
-#: (frames are n_T = 10 s apart, about 12.5 m: a longer window is a tangle of straight strokes).
+#: Figs 6-5 and 6-6: the time of the snapshot as a fraction of T_run (at most: :func:`_exploitation_time`),
+#: and the window of the paths [s]
+#: (about 37 m of driving at v0, three times across the field: a longer one is a tangle of paths).
 E0_EXPLOITATION = {"lunar-fig05": 0.5, "lunar-fig06": 1.0}
-PATH_WINDOW_S = 60.0
+PATH_WINDOW_S = 30.0
 #: Per figure: experiment -> the conditions it draws of it (None: all of the sweep's).
 SOURCES: dict[str, dict[str, tuple[str, ...] | None]] = {
     "lunar-fig07": {"e1": None},
@@ -108,7 +111,7 @@ TABLE_COLUMNS = {
     "stats": {"condition": "text", "selection": "text", "column": "text", "mean": "number", "sd": "number",
               "runs": "count"},
     "median": {"condition": "text", "run": "count", "resources": "count"},
-    "highlighted": {"robot": "count"},
+    "highlighted": {"robot": "count", "role": "text"},
 }
 #: The derived tables of each figure.
 DERIVED = {"lunar-fig05": ("highlighted",), "lunar-fig06": ("highlighted",), "lunar-fig07": ("curves", "stats"),
@@ -203,9 +206,24 @@ def _e0_snapshots(snapshots: pd.DataFrame, figure: str) -> pd.DataFrame:
 
 
 def _exploitation_time(frames: pd.DataFrame, figure: str) -> float:
-    """The frame time of Fig 6-5 / 6-6: the last frame at or before the figure's share of the run."""
+    """The frame time of Fig 6-5 / 6-6: the last frame at or before the figure's share of the run
+    whose window (:data:`PATH_WINDOW_S`) shows a robot driving in each highlighted role, as the
+    thesis's does (L1061; robots recharge for minutes, so a window may hold none in role R);
+    without one, the last frame at or before the share."""
     times = np.sort(frames["t"].unique())
-    return float(times[times <= E0_EXPLOITATION[figure] * times[-1] + 1e-9][-1])
+    ends = times[times <= E0_EXPLOITATION[figure] * times[-1] + 1e-9]
+    steps = experiments.drives(frames).sort_values("t_to", kind="mergesort")
+    shown = np.ones(len(ends), dtype=bool)
+    for role in experiments.HIGHLIGHTED_ROLES:
+        mine = steps[steps["role"] == role]
+        if not len(mine):
+            shown[:] = False
+            continue
+        # per end: the latest start of a step of this role that ended by then (a running maximum)
+        latest = np.maximum.accumulate(mine["t_from"].to_numpy())
+        last = np.searchsorted(mine["t_to"].to_numpy(), ends + 1e-9, side="right") - 1
+        shown &= (last >= 0) & (latest[np.maximum(last, 0)] > ends - PATH_WINDOW_S - 1e-9)
+    return float(ends[shown][-1] if shown.any() else ends[-1])
 
 
 def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
@@ -214,8 +232,7 @@ def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFra
     if figure in ("lunar-fig05", "lunar-fig06"):
         frames = tables["snapshots"]
         t_end = float(frames["t"].max())
-        return {"highlighted": pd.DataFrame({"robot": experiments.highlighted(frames, t_end, PATH_WINDOW_S)},
-                                            dtype=np.int64)}
+        return {"highlighted": experiments.highlighted(frames, t_end, PATH_WINDOW_S)}
     if figure in ("lunar-fig07", "lunar-fig11", "lunar-control"):
         out = {"curves": experiments.curves(tables["timeseries"], runs)}
         if figure != "lunar-fig11":
@@ -294,12 +311,14 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
         if figure == "lunar-fig03":
             return figures.snapshot(snapshots, geometry, v0, d / figure)
         if figure == "lunar-fig04":
-            words = {"first_T": "first entry into T", "first_R": "first entry into R", "first_row5": "first row 5"}
+            words = {"first_T": "first entry into T", "first_R": "first entry into R",
+                     "first_row5": "first recharged robot\nheads to N"}  # row 5: no path to R yet
             found = {words[label]: (snapshots[snapshots["label"] == label] if (snapshots["label"] == label).any()
                                     else None) for label in E0_LABELS[figure]}
             return figures.panels(found, geometry, v0, d / figure)
-        return figures.exploitation(snapshots, tables["highlighted"]["robot"].tolist(), float(snapshots["t"].max()),
-                                    PATH_WINDOW_S, geometry, v0, d / figure)
+        highlighted = tables["highlighted"]
+        return figures.exploitation(snapshots, dict(zip(highlighted["robot"].tolist(), highlighted["role"].tolist())),
+                                    float(snapshots["t"].max()), PATH_WINDOW_S, geometry, v0, d / figure)
     if figure == "lunar-fig07":
         curves = tables["curves"][tables["curves"]["selection"] == "selected"]
         return (figures.time_curves(curves, FIG07_METRICS, ORDER[figure], d / figure)

@@ -29,6 +29,11 @@ CONDITIONS = {
     "e2": (("SOFT-RT", 7.5, 0.05), ("SOFT-RT", 12.5, 0.05)),
     "e3": tuple((f"{kind}-{where}", 10.0, 0.05) for kind in ("HARD", "SOFT") for where in ("NT", "NR")),
     "eps1": (("OPEN", 10.0, 1.0), ("HARD-RT", 10.0, 1.0), ("SOFT-RT", 10.0, 1.0)),
+    # E4: the five scenarios at the defaults and under two changes (a fourth item: the keys a configuration sets)
+    "e4": tuple((layout, battery, eps, change) for change in ({}, {"kappa_soft": 5.0}, {"eps": 1.0})
+                for layout, battery, eps in (("OPEN", 10.0, 0.05), ("HARD-RT", 10.0, 0.05), ("SOFT-RT", 10.0, 0.05),
+                                             ("SOFT-RT", 7.5, 0.05), ("SOFT-RT", 12.5, 0.05))),
+    "e5": (("OPEN", 10.0, 0.05, {"model": "baseline"}), ("HARD-RT", 10.0, 0.05, {"model": "baseline"})),
 }
 
 
@@ -59,8 +64,8 @@ class Context:
 
     def load_sweep(self, path, changes=None):
         experiment = Path(path).stem.removeprefix("lunar-")
-        configs = [LunarParams(layout=layout, battery_wh=battery, eps=eps, **(changes or {}))
-                   for layout, battery, eps in CONDITIONS[experiment]]
+        configs = [LunarParams(**{"layout": layout, "battery_wh": battery, "eps": eps, **(keys[0] if keys else {}),
+                                  **(changes or {})}) for layout, battery, eps, *keys in CONDITIONS[experiment]]
         return types.SimpleNamespace(runs=[types.SimpleNamespace(config=c) for c in configs])
 
     def map(self, function, items):

@@ -110,6 +110,8 @@ KEYS: dict[str, Key] = {
                       "beacon changes", "redecide"),
     "completion": _word("options", "A17: completion by role (and rows 9, 11), or by the last region visited",
                         "completion"),
+    "model": _word("options", "E5: the Ch 5 model, or the Ch 4 baseline (no energy: roles F_OUT, F_IN, B only)",
+                   "model"),
 }
 
 #: Limits on a run's work and memory, checked before any work (:func:`run_size`). ``robot_ticks``:

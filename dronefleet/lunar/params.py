@@ -25,6 +25,7 @@ OPTIONS = {
     "turn_on": ("region", "any"),
     "redecide": ("none", "avoid_clear", "beacon_change"),
     "completion": ("role", "last_region"),
+    "model": ("full", "baseline"),
 }
 
 
@@ -133,6 +134,8 @@ class LunarParams:
     """A41: extra heading decisions: none, when avoidance clears, or when the nearest beacon changes."""
     completion: str = "role"
     """A17: completion by role and rows 9/11 ("role") or by the last region visited ("last_region")."""
+    model: str = "full"
+    """E5: the Ch 5 model ("full") or the Ch 4 baseline ("baseline": no energy, roles F_OUT, F_IN, B only)."""
 
     @property
     def n_T(self) -> int:

@@ -1,11 +1,13 @@
-"""``dronefleet reproduce lunar-fig03 .. lunar-fig11 lunar-control``: the lunar study's tables, drawings and check.
+"""``dronefleet reproduce lunar-fig03 .. lunar-fig11 lunar-control lunar-e4 lunar-e5``: the lunar study's tables,
+drawings and check.
 
 The scenario's ``study()`` hook (:class:`dronefleet.contract.FigureStudy`), run with the
 :class:`~dronefleet.contract.StudyContext` of ``dronefleet reproduce`` (it reads the sweep files,
 runs on its processes, reads and writes the tables: this package sits below them). Experiments
-(spec LUNAR-FORAGING.md section 14): E1-E3 and the eps = 1 control are the sweep files
+(spec LUNAR-FORAGING.md section 14): E1-E3, E5 and the eps = 1 control are the sweep files
 ``configs/sweeps/lunar-<experiment>.toml`` (:data:`SOURCES`: which conditions each figure draws);
-E0 (Figs 6-3 to 6-6) is one SOFT-RT run with frames, :data:`E0`, defined here.
+E0 (Figs 6-3 to 6-6) is one SOFT-RT run with frames, :data:`E0`, defined here; E4 (the
+sensitivity, ``lunar-e4``: per-run summaries only) is :mod:`dronefleet.lunar.sensitivity`.
 
 Each figure writes under ``<out>/<figure>/`` its raw tables, one row per run (``runs``: the
 summary, with :data:`~dronefleet.lunar.experiments.CONDITION_COLUMNS` and whether the run is
@@ -33,14 +35,15 @@ import pyarrow as pa
 
 from ..config import SweepError
 from ..contract import StudyContext, check_configurations, check_experiments
-from . import experiments
+from . import experiments, sensitivity
 from .experiments import CURVE_METRICS, TRIP_METRICS
 from .simulate import table_schemas
 
-TITLE = ("beacon-guided foraging with recharging on the Moon (Angyal 2024), Figs 6-3 to 6-11 and the eps = 1 "
-         "control (docs/guide/lunar.md)")
+TITLE = ("beacon-guided foraging with recharging on the Moon (Angyal 2024), Figs 6-3 to 6-11, the eps = 1 "
+         "control, the sensitivity E4 and the Ch 4 baseline E5 (docs/guide/lunar.md)")
 E0_FIGURES = ("lunar-fig03", "lunar-fig04", "lunar-fig05", "lunar-fig06")
-FIGURES = (*E0_FIGURES, "lunar-fig07", "lunar-fig08", "lunar-fig09", "lunar-fig11", "lunar-control")
+FIGURES = (*E0_FIGURES, "lunar-fig07", "lunar-fig08", "lunar-fig09", "lunar-fig11", "lunar-control",
+           sensitivity.FIGURE, "lunar-e5")
 #: --quick: every condition with fewer, shorter runs (E0 shorter).
 QUICK_CHANGES = {"runs": 5, "duration_s": 600.0}
 QUICK = (f"{QUICK_CHANGES['runs']} runs of {QUICK_CHANGES['duration_s']:g} s per condition "
@@ -60,21 +63,28 @@ SOURCES: dict[str, dict[str, tuple[str, ...] | None]] = {
     "lunar-fig09": {"e1": ("SOFT-RT",), "e2": None},
     "lunar-fig11": {"e1": ("HARD-RT", "SOFT-RT"), "e3": None},
     "lunar-control": {"e1": None, "eps1": None},
+    "lunar-e5": {"e1": ("OPEN", "HARD-RT"), "e5": None},
 }
+#: The experiments each figure's tables may name.
+EXPERIMENTS_OF = {**dict.fromkeys(E0_FIGURES, ("e0",)), **SOURCES, sensitivity.FIGURE: ("e4",)}
 #: What each figure draws: the conditions in legend order.
 ORDER = {
     "lunar-fig07": ("OPEN", "HARD-RT", "SOFT-RT"),
     "lunar-fig08": ("SOFT-RT 7.5 Wh", "SOFT-RT", "SOFT-RT 12.5 Wh", "OPEN", "HARD-RT"),
     "lunar-fig09": ("SOFT-RT 7.5 Wh", "SOFT-RT", "SOFT-RT 12.5 Wh"),
     "lunar-control": ("OPEN", "HARD-RT", "SOFT-RT"),
+    "lunar-e5": ("OPEN", "HARD-RT"),
 }
+#: lunar-e5: the condition word of the Ch 4 baseline and the legends' words for the two models.
+BASELINE = ("baseline", ("full model", "Ch 4 baseline"))
 #: Fig 6-7's panels (a)-(e) and the alignment diagnostic's.
 FIG07_METRICS = ("resources", "interruptions", "rate", "n_mobile", "soc_sum")
 ALIGNMENT_METRICS = ("alignment_T", "alignment_N", "alignment_R")
 #: The raw tables of each figure (the derived ones are computed from these).
 RAW = {**dict.fromkeys(E0_FIGURES, ("runs", "snapshots")), "lunar-fig07": ("runs", "timeseries"),
        "lunar-fig08": ("runs", "trips"), "lunar-fig09": ("runs", "snapshots"),
-       "lunar-fig11": ("runs", "timeseries"), "lunar-control": ("runs", "timeseries")}
+       "lunar-fig11": ("runs", "timeseries"), "lunar-control": ("runs", "timeseries"),
+       "lunar-e5": ("runs", "timeseries"), sensitivity.FIGURE: ("runs",)}
 #: Runs ``--check`` simulates again per figure (E1-E3: the best and the last of the first condition of
 #: the table, and the best of the last; E0: its run).
 CHECK_RUNS = 3
@@ -109,11 +119,13 @@ TABLE_COLUMNS = {
               "runs": "count"},
     "median": {"condition": "text", "run": "count", "resources": "count"},
     "highlighted": {"robot": "count"},
+    "effects": {"change": "text", "condition": "text", "metric": "text", "default_mean": "number", "mean": "number",
+                "effect": "number", "se": "number", "runs": "count"},
 }
 #: The derived tables of each figure.
 DERIVED = {"lunar-fig05": ("highlighted",), "lunar-fig06": ("highlighted",), "lunar-fig07": ("curves", "stats"),
            "lunar-fig08": ("bins",), "lunar-fig09": ("median",), "lunar-fig11": ("curves",),
-           "lunar-control": ("curves", "stats")}
+           "lunar-control": ("curves", "stats"), "lunar-e5": ("curves", "stats"), sensitivity.FIGURE: ("effects",)}
 
 
 def _with_v0(frame: pd.DataFrame, configs: dict) -> pd.DataFrame:
@@ -216,7 +228,7 @@ def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFra
         t_end = float(frames["t"].max())
         return {"highlighted": pd.DataFrame({"robot": experiments.highlighted(frames, t_end, PATH_WINDOW_S)},
                                             dtype=np.int64)}
-    if figure in ("lunar-fig07", "lunar-fig11", "lunar-control"):
+    if figure in ("lunar-fig07", "lunar-fig11", "lunar-control", "lunar-e5"):
         out = {"curves": experiments.curves(tables["timeseries"], runs)}
         if figure != "lunar-fig11":
             out["stats"] = experiments.run_stats(runs)
@@ -230,6 +242,8 @@ def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFra
 
 def tidy(study: StudyContext, figure: str) -> None:
     """Run (or take from this call's memo) the figure's experiments; write its raw and derived tables."""
+    if figure == sensitivity.FIGURE:
+        return sensitivity.tidy(study)
     d = study.figure_dir(figure)
     if figure in E0_FIGURES:
         tables = experiment_tables(study, "e0")
@@ -265,7 +279,7 @@ def read_tables(study: StudyContext, figure: str, names) -> dict[str, pd.DataFra
     for name, table in tables.items():
         if "experiment" in table.columns:
             check_experiments(table, study.root / figure / f"{name}.parquet",
-                              ("e0",) if figure in E0_FIGURES else SOURCES[figure])
+                              EXPERIMENTS_OF[figure])
         keys = [column for column in _CONDITION if column in KEYS and column in table.columns]
         if keys:
             check_configurations(table, keys, study.root / figure / f"{name}.parquet", MAX_CONDITIONS, checked,
@@ -286,6 +300,8 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     """The figure's files (PNG, PDF, SVG) from its tables alone."""
     from . import figures
 
+    if figure == sensitivity.FIGURE:
+        return sensitivity.draw(study)
     d = study.root / figure
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
     if figure in E0_FIGURES:
@@ -321,6 +337,8 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
         return figures.placement(tables["curves"][tables["curves"]["selection"] == "selected"], d / figure)
     curves = tables["curves"][tables["curves"]["selection"] == "selected"]
     stats = tables["stats"][tables["stats"]["selection"] == "selected"]
+    if figure == "lunar-e5":
+        return figures.control(curves, stats, ORDER[figure], d / figure, *BASELINE)
     return figures.control(curves, stats, ORDER[figure], d / figure)
 
 
@@ -374,6 +392,8 @@ def _config_of(study: StudyContext, experiment: str, condition: str, run: int, w
 def check(study: StudyContext, figure: str) -> list[str]:
     """Derive the figure's derived tables again from its raw ones, and simulate :data:`CHECK_RUNS`
     of its runs again; compare every value with the committed tables. The differences, one line each."""
+    if figure == sensitivity.FIGURE:
+        return sensitivity.check(study)
     d = study.root / figure
     if not (d / "runs.parquet").exists():
         raise SweepError(f"{d / 'runs.parquet'} is missing: run dronefleet reproduce {figure}"

@@ -11,7 +11,7 @@ it sets away from the defaults (:func:`change_of`), its scenario the layout and 
 The figure writes ``runs`` (one row per run: the simulator's summary after the condition
 columns and ``change``) and ``effects`` (derived from it alone), then draws the effects as a dot
 plot (:func:`draw_effects`). ``--check`` derives ``effects`` again and re-runs :data:`CHECK`
-runs.
+runs (:func:`rerun`). :mod:`dronefleet.lunar.study` calls these with E4's configurations.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import pandas as pd
 from ..config import SweepError
 
 __all__ = ["FIGURE", "DEFAULT", "METRICS", "SCENARIOS", "SCENARIO_KEYS", "change_of", "scenario_of", "runs_table",
-           "effects", "tidy", "draw", "check", "draw_effects"]
+           "effects", "tidy", "check_changes", "draw", "rerun", "draw_effects"]
 
 FIGURE = "lunar-e4"
 #: The change of the reference configurations (no key away from its default).
@@ -77,12 +77,6 @@ def _summary_of(config: Any) -> pd.DataFrame:
     from .simulate import simulate
 
     return simulate(config)["summary"].to_pandas()
-
-
-def _configs(study) -> list:
-    from .study import grid
-
-    return grid(study, "e4")
 
 
 def runs_table(configs: Sequence[Any], summaries: dict) -> pd.DataFrame:
@@ -140,11 +134,11 @@ def effects(runs: pd.DataFrame, metrics: Sequence[str] = METRICS) -> pd.DataFram
     return pd.DataFrame(rows, columns=list(EFFECT_COLUMNS)).astype({"runs": np.int64})
 
 
-def tidy(study) -> None:
-    """Run E4 (each chunk of the sweep once, its summaries only); write ``runs`` and ``effects``."""
+def tidy(study, configs: Sequence[Any]) -> None:
+    """Run E4's ``configs`` (each chunk once, its summaries only) on ``study``'s processes; write
+    ``runs`` and ``effects`` under ``study.figure_dir``."""
     from .experiments import chunks
 
-    configs = _configs(study)
     todo = list(dict.fromkeys(chunk for config in configs for chunk in chunks(config)))
     start = time.perf_counter()
     summaries = {}
@@ -160,55 +154,33 @@ def tidy(study) -> None:
     study.write_table(effects(runs), d / "effects.parquet")
 
 
-def _read(study) -> dict[str, pd.DataFrame]:
-    """The figure's tables, checked as the other figures' (:func:`dronefleet.lunar.study.read_tables`),
-    and each ``change`` one of the sweep's."""
-    from .study import read_tables
-
-    tables = read_tables(study, FIGURE, ("runs", "effects"))
-    for name, table in tables.items():
-        unknown = sorted(set(table["change"]) - {change_of(c) for c in _configs(study)} - {DEFAULT})
-        if unknown:
-            raise SweepError(f"{study.root / FIGURE / f'{name}.parquet'}: change {unknown[0]!r} is none of "
-                             f"configs/sweeps/lunar-e4.toml's")
-    return tables
+def check_changes(table: pd.DataFrame, path: Path, configs: Sequence[Any]) -> None:
+    """SweepError (one line naming ``path`` and the value) if a ``change`` of ``table`` is none of ``configs``'."""
+    unknown = sorted(set(table["change"]) - {change_of(c) for c in configs})
+    if unknown:
+        raise SweepError(f"{path}: change {unknown[0]!r} is none of configs/sweeps/lunar-e4.toml's")
 
 
-def draw(study) -> list[Path]:
-    """The figure's files from its tables alone."""
-    tables = _read(study)
-    runs = tables["runs"]
-    n = int(runs.groupby(["change", "condition"]).size().min())
-    return draw_effects(tables["effects"], n, study.root / FIGURE / FIGURE)
+def draw(tables: dict[str, pd.DataFrame], path: str | os.PathLike) -> list[Path]:
+    """The figure's files from its tables (``runs``, ``effects``) alone."""
+    n = int(tables["runs"].groupby(["change", "condition"]).size().min())
+    return draw_effects(tables["effects"], n, path)
 
 
-def check(study) -> list[str]:
-    """Derive ``effects`` again from ``runs`` and re-run the :data:`CHECK` runs: the differences."""
-    from .study import _differ
-
-    d = study.root / FIGURE
-    if not (d / "runs.parquet").exists():
-        raise SweepError(f"{d / 'runs.parquet'} is missing: run dronefleet reproduce {FIGURE}"
-                         f"{' --quick' if study.quick else ''} first (it writes the table that --check compares with)")
-    tables = _read(study)
-    runs = tables["runs"]
-    differences = _differ(FIGURE, "effects", tables["effects"], effects(runs))
-    study.log(f"{FIGURE}: derived tables {'identical' if not differences else f'{len(differences)} values differ'}")
-    configs = _configs(study)
+def rerun(runs: pd.DataFrame, configs: Sequence[Any]) -> list[tuple[str, pd.DataFrame, pd.DataFrame]]:
+    """The :data:`CHECK` runs of ``configs`` simulated again: (their words, their rows of ``runs``,
+    the fresh rows), ``selected`` left out (it ranks a run among its condition's)."""
     changes = list(dict.fromkeys(change_of(c) for c in configs))
+    found = []
     for change_at, scenario_at in CHECK:
         change = changes[change_at]
-        mine = [c for c in configs if change_of(c) == change]
-        config = dataclasses.replace(mine[scenario_at], runs=1)
+        config = dataclasses.replace([c for c in configs if change_of(c) == change][scenario_at], runs=1)
         condition = scenario_of(config)
         old = runs[(runs["change"] == change) & (runs["condition"] == condition) & (runs["run"] == config.first_run)]
         fresh = runs_table([config], {config: _summary_of(config)})
-        found = _differ(FIGURE, f"{change}, {condition} run {config.first_run}",
-                        old.drop(columns=["selected"]).reset_index(drop=True), fresh.drop(columns=["selected"]))
-        study.log(f"  {change}, {condition} run {config.first_run}: "
-                  f"{'identical' if not found else f'{len(found)} values differ'}")
-        differences += found
-    return differences
+        found.append((f"{change}, {condition} run {config.first_run}",
+                      old.drop(columns=["selected"]).reset_index(drop=True), fresh.drop(columns=["selected"])))
+    return found
 
 
 METRIC_WORDS = {"resources": "resources returned F(T_run)", "deaths": "deaths", "mobile": "mobile robots at the end"}

@@ -243,7 +243,7 @@ def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFra
 def tidy(study: StudyContext, figure: str) -> None:
     """Run (or take from this call's memo) the figure's experiments; write its raw and derived tables."""
     if figure == sensitivity.FIGURE:
-        return sensitivity.tidy(study)
+        return sensitivity.tidy(study, grid(study, "e4"))
     d = study.figure_dir(figure)
     if figure in E0_FIGURES:
         tables = experiment_tables(study, "e0")
@@ -280,6 +280,8 @@ def read_tables(study: StudyContext, figure: str, names) -> dict[str, pd.DataFra
         if "experiment" in table.columns:
             check_experiments(table, study.root / figure / f"{name}.parquet",
                               EXPERIMENTS_OF[figure])
+        if "change" in table.columns:
+            sensitivity.check_changes(table, study.root / figure / f"{name}.parquet", grid(study, "e4"))
         keys = [column for column in _CONDITION if column in KEYS and column in table.columns]
         if keys:
             check_configurations(table, keys, study.root / figure / f"{name}.parquet", MAX_CONDITIONS, checked,
@@ -300,10 +302,10 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     """The figure's files (PNG, PDF, SVG) from its tables alone."""
     from . import figures
 
-    if figure == sensitivity.FIGURE:
-        return sensitivity.draw(study)
     d = study.root / figure
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
+    if figure == sensitivity.FIGURE:
+        return sensitivity.draw(tables, d / figure)
     if figure in E0_FIGURES:
         snapshots = tables["snapshots"]
         geometry, v0 = _geometry(snapshots if len(snapshots) else tables["runs"]), float(tables["runs"]["v0"].iloc[0])
@@ -392,13 +394,13 @@ def _config_of(study: StudyContext, experiment: str, condition: str, run: int, w
 def check(study: StudyContext, figure: str) -> list[str]:
     """Derive the figure's derived tables again from its raw ones, and simulate :data:`CHECK_RUNS`
     of its runs again; compare every value with the committed tables. The differences, one line each."""
-    if figure == sensitivity.FIGURE:
-        return sensitivity.check(study)
     d = study.root / figure
     if not (d / "runs.parquet").exists():
         raise SweepError(f"{d / 'runs.parquet'} is missing: run dronefleet reproduce {figure}"
                          f"{' --quick' if study.quick else ''} first (it writes the table that --check compares with)")
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
+    if figure == sensitivity.FIGURE:
+        return _check_e4(study, tables)
     runs = tables["runs"]
     differences = _differ(figure, "runs", runs[["selected"]],
                           pd.DataFrame({"selected": experiments.selected(runs).to_numpy()}))
@@ -427,6 +429,19 @@ def check(study: StudyContext, figure: str) -> list[str]:
         differences += found
     if "snapshots" in tables:
         differences += _check_snapshots(study, figure, tables)
+    return differences
+
+
+def _check_e4(study: StudyContext, tables: dict[str, pd.DataFrame]) -> list[str]:
+    """lunar-e4's --check: ``effects`` derived again from ``runs``, and the runs of
+    :func:`dronefleet.lunar.sensitivity.rerun` simulated again."""
+    figure = sensitivity.FIGURE
+    differences = _differ(figure, "effects", tables["effects"], sensitivity.effects(tables["runs"]))
+    study.log(f"{figure}: derived tables {'identical' if not differences else f'{len(differences)} values differ'}")
+    for label, old, fresh in sensitivity.rerun(tables["runs"], grid(study, "e4")):
+        found = _differ(figure, f"{label} summary", old, fresh)
+        study.log(f"  {label}: {'identical' if not found else f'{len(found)} values differ'}")
+        differences += found
     return differences
 
 

@@ -398,7 +398,7 @@ def test_a_tampered_table_is_refused_in_one_line_by_redraw(quick_fig07, tmp_path
 
 def test_e4_pairs_each_change_with_the_defaults_per_scenario_and_e5_draws_the_baseline(synthetic_results):
     context, _ = synthetic_results
-    runs = pd.read_parquet(context.root / "lunar-e4" / "runs.parquet")
+    runs = pd.read_parquet(context.root / "lunar-e4" / "runs_by_change.parquet")
     assert list(dict.fromkeys(runs["change"])) == ["default", "kappa_soft=5", "eps=1"]
     assert len(runs) == 3 * 5 * study.QUICK_CHANGES["runs"]
     effects = pd.read_parquet(context.root / "lunar-e4" / "effects.parquet")

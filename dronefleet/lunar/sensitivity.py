@@ -8,8 +8,8 @@ it sets away from the defaults (:func:`change_of`), its scenario the layout and 
 13), so a change's effect on a per-run value is paired by run index: the mean over runs of
 (value under the change - value at the defaults) with its standard error (:func:`effects`).
 
-The figure writes ``runs`` (one row per run: the simulator's summary after the condition
-columns and ``change``) and ``effects`` (derived from it alone), then draws the effects as a dot
+The figure writes ``runs_by_change`` (one row per run: the simulator's summary after the
+condition columns and ``change``) and ``effects`` (derived from it alone), then draws the effects as a dot
 plot (:func:`draw_effects`). ``--check`` derives ``effects`` again and re-runs :data:`CHECK`
 runs (:func:`rerun`). :mod:`dronefleet.lunar.study` calls these with E4's configurations.
 """
@@ -136,7 +136,7 @@ def effects(runs: pd.DataFrame, metrics: Sequence[str] = METRICS) -> pd.DataFram
 
 def tidy(study, configs: Sequence[Any]) -> None:
     """Run E4's ``configs`` (each chunk once, its summaries only) on ``study``'s processes; write
-    ``runs`` and ``effects`` under ``study.figure_dir``."""
+    ``runs_by_change`` and ``effects`` under ``study.figure_dir``."""
     from .experiments import chunks
 
     todo = list(dict.fromkeys(chunk for config in configs for chunk in chunks(config)))
@@ -150,7 +150,7 @@ def tidy(study, configs: Sequence[Any]) -> None:
     study.log(f"  e4: {len(configs)} configurations, {len(todo)} chunks; {time.perf_counter() - start:.1f} s")
     runs = runs_table(configs, summaries)
     d = study.figure_dir(FIGURE)
-    study.write_table(runs, d / "runs.parquet")
+    study.write_table(runs, d / "runs_by_change.parquet")
     study.write_table(effects(runs), d / "effects.parquet")
 
 
@@ -162,8 +162,8 @@ def check_changes(table: pd.DataFrame, path: Path, configs: Sequence[Any]) -> No
 
 
 def draw(tables: dict[str, pd.DataFrame], path: str | os.PathLike) -> list[Path]:
-    """The figure's files from its tables (``runs``, ``effects``) alone."""
-    n = int(tables["runs"].groupby(["change", "condition"]).size().min())
+    """The figure's files from its tables (``runs_by_change``, ``effects``) alone."""
+    n = int(tables["runs_by_change"].groupby(["change", "condition"]).size().min())
     return draw_effects(tables["effects"], n, path)
 
 

@@ -84,7 +84,7 @@ ALIGNMENT_METRICS = ("alignment_T", "alignment_N", "alignment_R")
 RAW = {**dict.fromkeys(E0_FIGURES, ("runs", "snapshots")), "lunar-fig07": ("runs", "timeseries"),
        "lunar-fig08": ("runs", "trips"), "lunar-fig09": ("runs", "snapshots"),
        "lunar-fig11": ("runs", "timeseries"), "lunar-control": ("runs", "timeseries"),
-       "lunar-e5": ("runs", "timeseries"), sensitivity.FIGURE: ("runs",)}
+       "lunar-e5": ("runs", "timeseries"), sensitivity.FIGURE: ("runs_by_change",)}
 #: Runs ``--check`` simulates again per figure (E1-E3: the best and the last of the first condition of
 #: the table, and the best of the last; E0: its run).
 CHECK_RUNS = 3
@@ -102,11 +102,12 @@ def _kinds(schema: pa.Schema) -> dict[str, str]:
             else "number" for field in schema}
 
 
+_RUNS = {**_kinds(table_schemas()["summary"]), **_CONDITION, "run": "count", "seed": "integer", "resources": "count",
+         "selected": "flag"}
 #: The columns of the figures' tables and their kinds (:data:`dronefleet.reproduce.KINDS`): every
 #: column, so that each is checked (a runs table holds the simulator's whole summary).
 TABLE_COLUMNS = {
-    "runs": {**_kinds(table_schemas()["summary"]), **_CONDITION, "run": "count", "seed": "integer",
-             "resources": "count", "selected": "flag"},
+    "runs": _RUNS,
     "timeseries": {**_CONDITION, "run": "count", "t": "number", **dict.fromkeys(CURVE_METRICS, "number")},
     "trips": {**_CONDITION, "run": "count", "origin": "text", "dest": "text", "t_entered": "number",
               **dict.fromkeys(TRIP_METRICS, "number")},
@@ -119,6 +120,7 @@ TABLE_COLUMNS = {
               "runs": "count"},
     "median": {"condition": "text", "run": "count", "resources": "count"},
     "highlighted": {"robot": "count"},
+    "runs_by_change": {"change": "text", **_RUNS},
     "effects": {"change": "text", "condition": "text", "metric": "text", "default_mean": "number", "mean": "number",
                 "effect": "number", "se": "number", "runs": "count"},
 }
@@ -395,8 +397,9 @@ def check(study: StudyContext, figure: str) -> list[str]:
     """Derive the figure's derived tables again from its raw ones, and simulate :data:`CHECK_RUNS`
     of its runs again; compare every value with the committed tables. The differences, one line each."""
     d = study.root / figure
-    if not (d / "runs.parquet").exists():
-        raise SweepError(f"{d / 'runs.parquet'} is missing: run dronefleet reproduce {figure}"
+    raw = d / f"{RAW[figure][0]}.parquet"
+    if not raw.exists():
+        raise SweepError(f"{raw} is missing: run dronefleet reproduce {figure}"
                          f"{' --quick' if study.quick else ''} first (it writes the table that --check compares with)")
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
     if figure == sensitivity.FIGURE:
@@ -436,9 +439,10 @@ def _check_e4(study: StudyContext, tables: dict[str, pd.DataFrame]) -> list[str]
     """lunar-e4's --check: ``effects`` derived again from ``runs``, and the runs of
     :func:`dronefleet.lunar.sensitivity.rerun` simulated again."""
     figure = sensitivity.FIGURE
-    differences = _differ(figure, "effects", tables["effects"], sensitivity.effects(tables["runs"]))
+    runs = tables["runs_by_change"]
+    differences = _differ(figure, "effects", tables["effects"], sensitivity.effects(runs))
     study.log(f"{figure}: derived tables {'identical' if not differences else f'{len(differences)} values differ'}")
-    for label, old, fresh in sensitivity.rerun(tables["runs"], grid(study, "e4")):
+    for label, old, fresh in sensitivity.rerun(runs, grid(study, "e4")):
         found = _differ(figure, f"{label} summary", old, fresh)
         study.log(f"  {label}: {'identical' if not found else f'{len(found)} values differ'}")
         differences += found

@@ -330,7 +330,7 @@ def test_the_core_experiments_plan_their_conditions(tmp_path, capsys):
 def test_the_sensitivity_sweep_runs_each_variant_over_the_e4_conditions(tmp_path, capsys):
     sweep = sw.load_sweep(SWEEPS / "lunar-e4.toml")
     assert cli.main(["sweep", "plan", "lunar-e4", "--results", str(tmp_path)]) == 0
-    assert "#SBATCH --array=0-79\n" in (tmp_path / "lunar-e4" / "lunar-e4.sbatch").read_text()
+    assert "#SBATCH --array=0-89\n" in (tmp_path / "lunar-e4" / "lunar-e4.sbatch").read_text()
     capsys.readouterr()
     defaults = SCENARIO.load(None)
     conditions = [(layout, 10.0) for layout in E1] + [("SOFT-RT", 7.5), ("SOFT-RT", 12.5)]
@@ -342,13 +342,14 @@ def test_the_sensitivity_sweep_runs_each_variant_over_the_e4_conditions(tmp_path
         assert run.config.runs == 50
     assert all(sorted(found) == sorted(conditions) for found in variants.values())
     assert set(variants) == {
-        (("p_move", 5.8), ("v0", 0.125)), (("layout_scale", 1.0),), (("kappa_soft", 2.0),), (("kappa_soft", 5.0),),
+        (), (("eps", 1.0),), (("p_move", 5.8), ("v0", 0.125)), (("layout_scale", 1.0),), (("kappa_soft", 2.0),),
+        (("kappa_soft", 5.0),),
         (("p_move", 29.0),), (("p_move", 116.0),), (("p_move", 232.0),),
         (("weight_form", "bracket"),), (("weight_form", "literal"),), (("broadcast", "update"),),
         (("turn_on", "any"),), (("los_bodies", True),), (("redecide", "avoid_clear"),),
         (("redecide", "beacon_change"),), (("fallback", "literal"),),
         (("avoidance", "turn"), ("broadcast_velocity", "motion"))}
-    assert len(sweep.runs) == 16 * 5 == 80
+    assert len(sweep.runs) == 18 * 5 == 90
     assert all(math.isclose(p.p_move / p.v0, 46.4) for p in (r.config for r in sweep.runs) if p.v0 == 0.125)
 
 

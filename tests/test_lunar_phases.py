@@ -235,6 +235,20 @@ def test_a_due_robot_follows_the_guidance_of_its_role_with_two_draws_and_restart
     assert np.array_equal(s.rng[0, 2], untouched)
 
 
+@pytest.mark.parametrize("model", ["full", "baseline"])
+def test_an_f_in_robot_without_f_in_guidance_follows_the_r_key_only_in_the_full_model(model):
+    # Eq 5-16's F_IN -> R fallback; the Ch 4 baseline has no R key (Eq 4-11): a random search
+    s = state(2, model=model)
+    s.pars[k.P_EPS] = 0.0                                  # always follow when there is guidance
+    put(s, 0, *FREE, role=k.F_IN)
+    s.countdown[0] = 0
+    put(s, 1, FREE[0] + 1.0, FREE[1], beacon_was=k.F_OUT)
+    s.weight[1, k.R], s.bvy[1, k.R] = 1.0, 1.0             # G^R points north, no G^F_IN
+    s.nb_cnt[0], s.nb_list[0, 0] = 1, 1
+    decide(s)
+    assert s.decided[0] and (s.theta_a[0] == atan2(1.0, 0.0)) == (model == "full")
+
+
 def test_a_reconnecting_robot_in_contact_backtracks_with_budget_n_failed_half_comm():
     s = state(2)
     put(s, 0, *FREE, role=k.F_IN)

@@ -29,6 +29,11 @@ CONDITIONS = {
     "e2": (("SOFT-RT", 7.5, 0.05), ("SOFT-RT", 12.5, 0.05)),
     "e3": tuple((f"{kind}-{where}", 10.0, 0.05) for kind in ("HARD", "SOFT") for where in ("NT", "NR")),
     "eps1": (("OPEN", 10.0, 1.0), ("HARD-RT", 10.0, 1.0), ("SOFT-RT", 10.0, 1.0)),
+    # E4: the five scenarios at the defaults and under two changes (a fourth item: the keys a configuration sets)
+    "e4": tuple((layout, battery, eps, change) for change in ({}, {"kappa_soft": 5.0}, {"eps": 1.0})
+                for layout, battery, eps in (("OPEN", 10.0, 0.05), ("HARD-RT", 10.0, 0.05), ("SOFT-RT", 10.0, 0.05),
+                                             ("SOFT-RT", 7.5, 0.05), ("SOFT-RT", 12.5, 0.05))),
+    "e5": (("OPEN", 10.0, 0.05, {"model": "baseline"}), ("HARD-RT", 10.0, 0.05, {"model": "baseline"})),
 }
 
 
@@ -59,8 +64,8 @@ class Context:
 
     def load_sweep(self, path, changes=None):
         experiment = Path(path).stem.removeprefix("lunar-")
-        configs = [LunarParams(layout=layout, battery_wh=battery, eps=eps, **(changes or {}))
-                   for layout, battery, eps in CONDITIONS[experiment]]
+        configs = [LunarParams(**{"layout": layout, "battery_wh": battery, "eps": eps, **(keys[0] if keys else {}),
+                                  **(changes or {})}) for layout, battery, eps, *keys in CONDITIONS[experiment]]
         return types.SimpleNamespace(runs=[types.SimpleNamespace(config=c) for c in configs])
 
     def map(self, function, items):
@@ -563,3 +568,31 @@ def test_a_tampered_table_is_refused_in_one_line_by_redraw(quick_fig07, tmp_path
     assert cli.main(["reproduce", "lunar-fig07", "--quick", "--redraw", "--out", str(copy)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("dronefleet: error: ") and err.count("\n") == 1 and str(runs) in err and "'MOON'" in err
+
+
+def test_e4_pairs_each_change_with_the_defaults_per_scenario_and_e5_draws_the_baseline(synthetic_results):
+    context, _ = synthetic_results
+    runs = pd.read_parquet(context.root / "lunar-e4" / "runs_by_change.parquet")
+    assert list(dict.fromkeys(runs["change"])) == ["default", "kappa_soft=5", "eps=1"]
+    assert len(runs) == 3 * 5 * study.QUICK_CHANGES["runs"]
+    effects = pd.read_parquet(context.root / "lunar-e4" / "effects.parquet")
+    assert len(effects) == 2 * 5 * 3 and set(effects["runs"]) == {study.QUICK_CHANGES["runs"]}
+    row = effects[(effects["change"] == "eps=1") & (effects["condition"] == "SOFT-RT 7.5 Wh")
+                  & (effects["metric"] == "resources")].iloc[0]
+    mine = runs[runs["condition"] == "SOFT-RT 7.5 Wh"].pivot(index="run", columns="change", values="resources")
+    assert row["effect"] == pytest.approx((mine["eps=1"] - mine["default"]).mean())
+    assert set(pd.read_parquet(context.root / "lunar-e5" / "runs.parquet")["condition"]) == {
+        "OPEN", "HARD-RT", "OPEN baseline", "HARD-RT baseline"}
+
+
+def test_an_e4_change_not_the_sweeps_is_refused_naming_it(synthetic_results):
+    from dronefleet.config import SweepError
+
+    context, _ = synthetic_results
+    path = context.root / "lunar-e4" / "effects.parquet"
+    table = pd.read_parquet(path)
+    table.loc[0, "change"] = "v0=9"
+    table.to_parquet(path, index=False)
+    for call in (study.check, study.draw):
+        with pytest.raises(SweepError, match=re.escape(f"{path}: change 'v0=9' is none of")):
+            call(context, "lunar-e4")

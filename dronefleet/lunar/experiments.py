@@ -34,7 +34,7 @@ __all__ = ["EXPERIMENTS", "CONDITION_COLUMNS", "CURVE_METRICS", "TRIP_METRICS", 
            "chunks", "run_chunks", "run_configs"]
 
 #: The experiments with a sweep file, ``configs/sweeps/lunar-<name>.toml`` (section 14).
-EXPERIMENTS = ("e1", "e2", "e3", "eps1")
+EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "eps1")
 #: The columns that say which condition a row belongs to (``condition``: their words).
 CONDITION_COLUMNS = ("experiment", "condition", "layout", "layout_scale", "battery_wh", "eps")
 #: The time-series columns the figures draw (Figs 6-7, 6-11, the control and the alignment).
@@ -58,9 +58,10 @@ def grid_path(experiment: str) -> Path:
     return shipped_config("sweeps", f"lunar-{experiment}.toml")
 
 
-def condition_of(layout: str, battery_wh: float, eps: float) -> str:
-    """The words of a condition, as the figures' legends name it: the layout, then the battery
-    and eps where they are not the defaults (``SOFT-RT``, ``SOFT-RT 7.5 Wh``, ``OPEN eps=1``)."""
+def condition_of(layout: str, battery_wh: float, eps: float, model: str = "full") -> str:
+    """The words of a condition, as the figures' legends name it: the layout, then the battery,
+    eps and the model where they are not the defaults (``SOFT-RT``, ``SOFT-RT 7.5 Wh``, ``OPEN eps=1``,
+    ``OPEN baseline``)."""
     from .params import LunarParams
 
     default = LunarParams()
@@ -69,12 +70,15 @@ def condition_of(layout: str, battery_wh: float, eps: float) -> str:
         words.append(f"{battery_wh:g} Wh")
     if eps != default.eps:
         words.append(f"eps={eps:g}")
+    if model != default.model:
+        words.append(model)
     return " ".join(words)
 
 
 def condition_row(config: Any, experiment: str) -> dict[str, Any]:
     """The :data:`CONDITION_COLUMNS` of ``config`` (a :class:`~dronefleet.lunar.params.LunarParams`)."""
-    return {"experiment": experiment, "condition": condition_of(config.layout, config.battery_wh, config.eps),
+    return {"experiment": experiment,
+            "condition": condition_of(config.layout, config.battery_wh, config.eps, config.model),
             "layout": config.layout, "layout_scale": config.layout_scale, "battery_wh": config.battery_wh,
             "eps": config.eps}
 

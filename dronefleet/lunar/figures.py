@@ -348,11 +348,13 @@ def trip_curves(bins: pandas.DataFrame, conditions: Sequence[str], bin_s: float,
 
 
 def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence[str],
-            path: str | os.PathLike) -> list[Path]:
+            path: str | os.PathLike, variant: str = "eps=1", words: tuple[str, str] = ("network", WITHOUT)) \
+        -> list[Path]:
     """The eps = 1 control (section 14): (a) resources returned against time per layout, with the
     guidance network (solid) and without (eps = 1, dashed); (b) F(T_run) of each, mean +- standard error,
     with the share the control keeps written over its bar, on (a)'s y-scale (one quantity).
-    ``stats``: run_stats rows of one selection; conditions named "<layout>" and "<layout> eps=1"."""
+    ``stats``: run_stats rows of one selection; conditions named "<layout>" and "<layout> <variant>"
+    (``words``: how the legends name the two; E5 draws the Ch 4 baseline as the variant)."""
     from matplotlib.patches import Patch
 
     colours = _condition_styles(layouts)
@@ -360,11 +362,11 @@ def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence
                  width_ratios=(1.6, 1.0)) as (mpl, fig, axes):
         ax, bars = axes[0]
         for layout in layouts:
-            for condition, ls, words in ((layout, "-", "network"), (f"{layout} eps=1", "--", WITHOUT)):
+            for condition, ls, word in ((layout, "-", words[0]), (f"{layout} {variant}", "--", words[1])):
                 rows = curves[(curves["metric"] == "resources") & (curves["condition"] == condition)]
                 if len(rows):
                     _band(ax, rows.assign(t=rows["t"] / 60.0), "t",
-                          colours[layout]._replace(linestyle=ls), f"{layout}, {words}")
+                          colours[layout]._replace(linestyle=ls), f"{layout}, {word}")
         ax.set_xlabel("time [min]")
         ax.set_ylabel(METRIC_WORDS["resources"])
         ax.grid(alpha=0.3)
@@ -373,21 +375,21 @@ def control(curves: pandas.DataFrame, stats: pandas.DataFrame, layouts: Sequence
         final = stats[stats["column"] == "resources"].set_index("condition")
         for k, layout in enumerate(layouts):
             colour = colours[layout].colour
-            for offset, condition, fill in ((-0.2, layout, True), (0.2, f"{layout} eps=1", False)):
+            for offset, condition, fill in ((-0.2, layout, True), (0.2, f"{layout} {variant}", False)):
                 if condition not in final.index:
                     continue
                 bars.bar(k + offset, final.loc[condition, "mean"], 0.38, yerr=_se(final.loc[[condition]], "runs"),
                          color=colour if fill else "white",
                          hatch="" if fill else "///", ec=colour, lw=0.8, error_kw={"lw": 0.8, "ecolor": "black"})
-            if layout in final.index and f"{layout} eps=1" in final.index and final.loc[layout, "mean"] > 0:
-                share = final.loc[f"{layout} eps=1", "mean"] / final.loc[layout, "mean"]
-                bars.annotate(f"{share:.0%}", (k + 0.2, final.loc[f"{layout} eps=1", "mean"]),
+            if layout in final.index and f"{layout} {variant}" in final.index and final.loc[layout, "mean"] > 0:
+                share = final.loc[f"{layout} {variant}", "mean"] / final.loc[layout, "mean"]
+                bars.annotate(f"{share:.0%}", (k + 0.2, final.loc[f"{layout} {variant}", "mean"]),
                               xytext=(0, 3), textcoords="offset points", ha="center", va="bottom")
         bars.set_xticks(range(len(layouts)), layouts)
         bars.set_ylabel("resources returned by the end [units]")
         bars.yaxis.set_tick_params(labelleft=True)
-        bars.legend(handles=[Patch(fc="0.4", ec="0.4", label="network"),
-                             Patch(fc="white", ec="0.4", hatch="///", label=WITHOUT)], loc="upper center",
+        bars.legend(handles=[Patch(fc="0.4", ec="0.4", label=words[0]),
+                             Patch(fc="white", ec="0.4", hatch="///", label=words[1])], loc="upper center",
                     bbox_to_anchor=(0.5, -0.1), ncols=2, frameon=False)
         bars.grid(alpha=0.3, axis="y")
         letter_panels([ax, bars])

@@ -94,8 +94,8 @@ REDECIDE_NONE, REDECIDE_AVOID_CLEAR, REDECIDE_BEACON_CHANGE = 0, 1, 2
 # Integer options and float parameters: indices into ``opts`` and ``pars``.
 (O_ROBOTS, O_TICKS, O_NT, O_RMAX, O_BLOCKED, O_RATE_W, O_SNAP_EVERY, O_FRAMES, O_AVOID_TURN,
  O_BCAST_MOTION, O_BCAST_UPDATE, O_WFORM, O_FALLBACK_LITERAL, O_TURN_ANY, O_LOS_BODIES, O_REDECIDE,
- O_COMPLETION_LAST, O_INIT_STATE, O_DEPLETION_RECORDED, O_EXPERIENCE_LEAVING) = range(20)
-N_OPTS = 20
+ O_COMPLETION_LAST, O_INIT_STATE, O_DEPLETION_RECORDED, O_EXPERIENCE_LEAVING, O_BASELINE) = range(21)
+N_OPTS = 21
 (P_TAU, P_RHO_W, P_RHO_V, P_RHO_P, P_RHO_F, P_RHO_C, P_COMM_R, P_ETA_W, P_PHI, P_V0, P_EPS, P_REWARD,
  P_LAMBDA, P_KAPPA, P_ECAP, P_SOC0, P_MOVE, P_COMP, P_COMM, P_SCAN, P_AVOID, P_EXPLOIT, P_SOLAR,
  P_RBODY, P_IR, P_DECISION_STEP, P_SOC0_LOW) = range(27)
@@ -336,18 +336,20 @@ def tick_energy(energy, pars, in_r, mobile, links, moved, kappa, avoiding, loade
 
 
 @njit(cache=True)
-def choose_row(role, mode, region, n_in_range, role_k1, role_k2, soc, s_hat, visited_r, full, loaded, no_r_guidance):
+def choose_row(role, mode, region, n_in_range, role_k1, role_k2, soc, s_hat, visited_r, full, loaded, no_r_guidance,
+               baseline=False):
     """The row of section 9 (1..11; 0: none) that fires for an alive mobile robot: the first whose
     guard holds, from the robot's role and mode, its region (REG_* or NO_REGION), the number of
     beacons in range, its roles at k-1 and k-2, SOC, S_hat by key (3,), visited_R, E = E_cap,
     l > 0 and "no R guidance" (all from the section-5 snapshot). Row 3 also fires in role R (a
-    no-op there: the robot already goes to charge, which keeps row 9 from firing)."""
+    no-op there: the robot already goes to charge, which keeps row 9 from firing). ``baseline``
+    (the Ch 4 model, Eq 4-5): rows 2 and 3, the only ways into role R, never fire."""
     charging = mode == CHARGING
     if n_in_range == 0 and role_k1 != B and role_k2 != B and region != REG_N and mode != RECONNECT:
         return 1
-    if role != R and (soc < s_hat[role] or soc < s_hat[R]):
+    if not baseline and role != R and (soc < s_hat[role] or soc < s_hat[R]):
         return 2
-    if region == REG_N and not visited_r:
+    if not baseline and region == REG_N and not visited_r:
         return 3
     if role == R and not charging and region == REG_R:
         return 4
@@ -675,6 +677,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
     r_max = opts[O_RMAX]
     completion_last = opts[O_COMPLETION_LAST] != 0
     turn_any = opts[O_TURN_ANY] != 0
+    baseline = opts[O_BASELINE] != 0
     e_cap = pars[P_ECAP]
     for i in range(spawned):
         loaded_now[i] = False
@@ -693,7 +696,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
         elif rg == r0:                     # F_OUT in T, F_IN in N, R in R
             complete(i, r0, s_c, n_failed, mode)
         row = choose_row(r0, mode[i], rg, nb_cnt[i], role_k1[i], role_k2[i], energy[i] / e_cap, s_hat[i],
-                         visited_r[i], energy[i] == e_cap, load[i] > 0, no_r_guidance[i])
+                         visited_r[i], energy[i] == e_cap, load[i] > 0, no_r_guidance[i], baseline)
         if row == 0 or (row == 3 and r0 == R):
             continue                       # row 3 in role R: already going to charge
         if not take(table, sup, i, ROW_EVENT[row]):
@@ -756,6 +759,7 @@ def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt
     nb_cnt, nb_list = sensed[3], sensed[4]
     n_t = opts[O_NT]
     fallback_literal = opts[O_FALLBACK_LITERAL] != 0
+    baseline = opts[O_BASELINE] != 0     # Ch 4 (Eq 4-11): no R key to fall back on
     comm = pars[P_COMM_R]
     eps = pars[P_EPS]
     for i in range(spawned):
@@ -787,7 +791,7 @@ def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt
             key = role[i]
             gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, key)
             if gx == 0.0 and gy == 0.0:
-                if key == F_IN:
+                if key == F_IN and not baseline:
                     gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, R)
                 elif key == R and (visited_r[i] or fallback_literal):
                     gx, gy = guidance(nb_list[i], nb_cnt[i], weight, bvx, bvy, F_IN)

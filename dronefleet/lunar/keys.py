@@ -122,6 +122,8 @@ KEYS: dict[str, Key] = {
                        "depletion"),
     "experience": _word("options", "Sec 4-1-3: beacons take every robot's experience, or only that of robots "
                         "moving away from the region they last completed", "experience"),
+    "model": _word("options", "E5: the Ch 5 model, or the Ch 4 baseline (no energy: roles F_OUT, F_IN, B only)",
+                   "model"),
 }
 
 #: Limits on a run's work and memory, checked before any work (:func:`run_size`). ``robot_ticks``:

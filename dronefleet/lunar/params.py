@@ -27,6 +27,7 @@ OPTIONS = {
     "completion": ("role", "last_region"),
     "depletion": ("fatal", "recorded"),
     "experience": ("any", "leaving"),
+    "model": ("full", "baseline"),
 }
 
 
@@ -147,6 +148,8 @@ class LunarParams:
     """A32: SOC 0 kills ("fatal") or is counted and the robot goes on towards R ("recorded")."""
     experience: str = "any"
     """Sec 4-1-3: beacons take messages from every robot ("any") or from robots leaving region(s_c) ("leaving")."""
+    model: str = "full"
+    """E5: the Ch 5 model ("full") or the Ch 4 baseline ("baseline": no energy, roles F_OUT, F_IN, B only)."""
 
     @property
     def n_T(self) -> int:

@@ -119,6 +119,7 @@ def kernel_inputs(params: LunarParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     opts[k.O_INIT_STATE] = role_table()[1]
     opts[k.O_DEPLETION_RECORDED] = p.depletion == "recorded"
     opts[k.O_EXPERIENCE_LEAVING] = p.experience == "leaving"
+    opts[k.O_BASELINE] = p.model == "baseline"
     pars = np.zeros(k.N_PARS)
     pars[k.P_TAU], pars[k.P_RHO_W], pars[k.P_RHO_V], pars[k.P_RHO_P] = p.tau, p.rho_w, p.rho_v, p.rho_p
     pars[k.P_RHO_F], pars[k.P_RHO_C], pars[k.P_COMM_R], pars[k.P_ETA_W] = p.rho_f, p.rho_c, p.comm_radius, p.eta_w
@@ -126,6 +127,8 @@ def kernel_inputs(params: LunarParams) -> tuple[np.ndarray, np.ndarray, np.ndarr
     pars[k.P_LAMBDA], pars[k.P_KAPPA], pars[k.P_ECAP], pars[k.P_SOC0] = p.diffusion, p.kappa_soft, p.e_cap_j, p.soc0
     pars[k.P_MOVE], pars[k.P_COMP], pars[k.P_COMM], pars[k.P_SCAN] = p.p_move, p.p_comp, p.p_comm, p.p_scan
     pars[k.P_AVOID], pars[k.P_EXPLOIT], pars[k.P_SOLAR] = p.p_avoid, p.e_exploit, p.p_solar
+    if p.model == "baseline":  # Ch 4 has no energy: nothing is drawn, E stays E_cap (the powers are not used)
+        pars[[k.P_MOVE, k.P_COMP, k.P_COMM, k.P_SCAN, k.P_AVOID, k.P_EXPLOIT]] = 0.0
     pars[k.P_RBODY], pars[k.P_IR] = p.r_body, p.ir_range
     pars[k.P_DECISION_STEP], pars[k.P_SOC0_LOW] = p.decision_step_m, p.soc0_low
     if p.energy_scale != 1.0:  # A8: scaled once here, so that the default's arithmetic is untouched

@@ -1,11 +1,13 @@
-"""``dronefleet reproduce lunar-fig03 .. lunar-fig11 lunar-control``: the lunar study's tables, drawings and check.
+"""``dronefleet reproduce lunar-fig03 .. lunar-fig11 lunar-control lunar-e4 lunar-e5``: the lunar study's tables,
+drawings and check.
 
 The scenario's ``study()`` hook (:class:`dronefleet.contract.FigureStudy`), run with the
 :class:`~dronefleet.contract.StudyContext` of ``dronefleet reproduce`` (it reads the sweep files,
 runs on its processes, reads and writes the tables: this package sits below them). Experiments
-(spec LUNAR-FORAGING.md section 14): E1-E3 and the eps = 1 control are the sweep files
+(spec LUNAR-FORAGING.md section 14): E1-E3, E5 and the eps = 1 control are the sweep files
 ``configs/sweeps/lunar-<experiment>.toml`` (:data:`SOURCES`: which conditions each figure draws);
-E0 (Figs 6-3 to 6-6) is one SOFT-RT run with frames, :data:`E0`, defined here.
+E0 (Figs 6-3 to 6-6) is one SOFT-RT run with frames, :data:`E0`, defined here; E4 (the
+sensitivity, ``lunar-e4``: per-run summaries only) is :mod:`dronefleet.lunar.sensitivity`.
 
 Each figure writes under ``<out>/<figure>/`` its raw tables, one row per run (``runs``: the
 summary, with :data:`~dronefleet.lunar.experiments.CONDITION_COLUMNS` and whether the run is
@@ -33,14 +35,15 @@ import pyarrow as pa
 
 from ..config import SweepError
 from ..contract import StudyContext, check_configurations, check_experiments
-from . import experiments
+from . import experiments, sensitivity
 from .experiments import CURVE_METRICS, TRIP_METRICS
 from .simulate import table_schemas
 
-TITLE = ("beacon-guided foraging with recharging on the Moon (Angyal 2024), Figs 6-3 to 6-11 and the eps = 1 "
-         "control (docs/guide/lunar.md)")
+TITLE = ("beacon-guided foraging with recharging on the Moon (Angyal 2024), Figs 6-3 to 6-11, the eps = 1 "
+         "control, the sensitivity E4 and the Ch 4 baseline E5 (docs/guide/lunar.md)")
 E0_FIGURES = ("lunar-fig03", "lunar-fig04", "lunar-fig05", "lunar-fig06")
-FIGURES = (*E0_FIGURES, "lunar-fig07", "lunar-fig08", "lunar-fig09", "lunar-fig11", "lunar-control")
+FIGURES = (*E0_FIGURES, "lunar-fig07", "lunar-fig08", "lunar-fig09", "lunar-fig11", "lunar-control",
+           sensitivity.FIGURE, "lunar-e5")
 #: --quick: every condition with fewer, shorter runs (E0 shorter).
 QUICK_CHANGES = {"runs": 5, "duration_s": 600.0}
 QUICK = (f"{QUICK_CHANGES['runs']} runs of {QUICK_CHANGES['duration_s']:g} s per condition "
@@ -63,21 +66,28 @@ SOURCES: dict[str, dict[str, tuple[str, ...] | None]] = {
     "lunar-fig09": {"e1": ("SOFT-RT",), "e2": None},
     "lunar-fig11": {"e1": ("HARD-RT", "SOFT-RT"), "e3": None},
     "lunar-control": {"e1": None, "eps1": None},
+    "lunar-e5": {"e1": ("OPEN", "HARD-RT"), "e5": None},
 }
+#: The experiments each figure's tables may name.
+EXPERIMENTS_OF = {**dict.fromkeys(E0_FIGURES, ("e0",)), **SOURCES, sensitivity.FIGURE: ("e4",)}
 #: What each figure draws: the conditions in legend order.
 ORDER = {
     "lunar-fig07": ("OPEN", "HARD-RT", "SOFT-RT"),
     "lunar-fig08": ("SOFT-RT 7.5 Wh", "SOFT-RT", "SOFT-RT 12.5 Wh", "OPEN", "HARD-RT"),
     "lunar-fig09": ("SOFT-RT 7.5 Wh", "SOFT-RT", "SOFT-RT 12.5 Wh"),
     "lunar-control": ("OPEN", "HARD-RT", "SOFT-RT"),
+    "lunar-e5": ("OPEN", "HARD-RT"),
 }
+#: lunar-e5: the condition word of the Ch 4 baseline and the legends' words for the two models.
+BASELINE = ("baseline", ("full model", "Ch 4 baseline"))
 #: Fig 6-7's panels (a)-(e) and the alignment diagnostic's.
 FIG07_METRICS = ("resources", "interruptions", "rate", "n_mobile", "soc_sum")
 ALIGNMENT_METRICS = ("alignment_T", "alignment_N", "alignment_R")
 #: The raw tables of each figure (the derived ones are computed from these).
 RAW = {**dict.fromkeys(E0_FIGURES, ("runs", "snapshots")), "lunar-fig07": ("runs", "timeseries"),
        "lunar-fig08": ("runs", "trips"), "lunar-fig09": ("runs", "snapshots"),
-       "lunar-fig11": ("runs", "timeseries"), "lunar-control": ("runs", "timeseries")}
+       "lunar-fig11": ("runs", "timeseries"), "lunar-control": ("runs", "timeseries"),
+       "lunar-e5": ("runs", "timeseries"), sensitivity.FIGURE: ("runs_by_change",)}
 #: Runs ``--check`` simulates again per figure (E1-E3: the best and the last of the first condition of
 #: the table, and the best of the last; E0: its run).
 CHECK_RUNS = 3
@@ -95,11 +105,12 @@ def _kinds(schema: pa.Schema) -> dict[str, str]:
             else "number" for field in schema}
 
 
+_RUNS = {**_kinds(table_schemas()["summary"]), **_CONDITION, "run": "count", "seed": "integer", "resources": "count",
+         "selected": "flag"}
 #: The columns of the figures' tables and their kinds (:data:`dronefleet.reproduce.KINDS`): every
 #: column, so that each is checked (a runs table holds the simulator's whole summary).
 TABLE_COLUMNS = {
-    "runs": {**_kinds(table_schemas()["summary"]), **_CONDITION, "run": "count", "seed": "integer",
-             "resources": "count", "selected": "flag"},
+    "runs": _RUNS,
     "timeseries": {**_CONDITION, "run": "count", "t": "number", **dict.fromkeys(CURVE_METRICS, "number")},
     "trips": {**_CONDITION, "run": "count", "origin": "text", "dest": "text", "t_entered": "number",
               **dict.fromkeys(TRIP_METRICS, "number")},
@@ -112,11 +123,14 @@ TABLE_COLUMNS = {
               "runs": "count"},
     "median": {"condition": "text", "run": "count", "resources": "count"},
     "highlighted": {"robot": "count", "role": "text"},
+    "runs_by_change": {"change": "text", **_RUNS},
+    "effects": {"change": "text", "condition": "text", "metric": "text", "default_mean": "number", "mean": "number",
+                "effect": "number", "se": "number", "runs": "count"},
 }
 #: The derived tables of each figure.
 DERIVED = {"lunar-fig05": ("highlighted",), "lunar-fig06": ("highlighted",), "lunar-fig07": ("curves", "stats"),
            "lunar-fig08": ("bins",), "lunar-fig09": ("median",), "lunar-fig11": ("curves",),
-           "lunar-control": ("curves", "stats")}
+           "lunar-control": ("curves", "stats"), "lunar-e5": ("curves", "stats"), sensitivity.FIGURE: ("effects",)}
 
 
 def _with_v0(frame: pd.DataFrame, configs: dict) -> pd.DataFrame:
@@ -233,7 +247,7 @@ def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFra
         frames = tables["snapshots"]
         t_end = float(frames["t"].max())
         return {"highlighted": experiments.highlighted(frames, t_end, PATH_WINDOW_S)}
-    if figure in ("lunar-fig07", "lunar-fig11", "lunar-control"):
+    if figure in ("lunar-fig07", "lunar-fig11", "lunar-control", "lunar-e5"):
         out = {"curves": experiments.curves(tables["timeseries"], runs)}
         if figure != "lunar-fig11":
             out["stats"] = experiments.run_stats(runs)
@@ -247,6 +261,8 @@ def derive(figure: str, tables: dict[str, pd.DataFrame]) -> dict[str, pd.DataFra
 
 def tidy(study: StudyContext, figure: str) -> None:
     """Run (or take from this call's memo) the figure's experiments; write its raw and derived tables."""
+    if figure == sensitivity.FIGURE:
+        return sensitivity.tidy(study, grid(study, "e4"))
     d = study.figure_dir(figure)
     if figure in E0_FIGURES:
         tables = experiment_tables(study, "e0")
@@ -282,7 +298,9 @@ def read_tables(study: StudyContext, figure: str, names) -> dict[str, pd.DataFra
     for name, table in tables.items():
         if "experiment" in table.columns:
             check_experiments(table, study.root / figure / f"{name}.parquet",
-                              ("e0",) if figure in E0_FIGURES else SOURCES[figure])
+                              EXPERIMENTS_OF[figure])
+        if "change" in table.columns:
+            sensitivity.check_changes(table, study.root / figure / f"{name}.parquet", grid(study, "e4"))
         keys = [column for column in _CONDITION if column in KEYS and column in table.columns]
         if keys:
             check_configurations(table, keys, study.root / figure / f"{name}.parquet", MAX_CONDITIONS, checked,
@@ -305,6 +323,8 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
 
     d = study.root / figure
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
+    if figure == sensitivity.FIGURE:
+        return sensitivity.draw(tables, d / figure)
     if figure in E0_FIGURES:
         snapshots = tables["snapshots"]
         geometry, v0 = _geometry(snapshots if len(snapshots) else tables["runs"]), float(tables["runs"]["v0"].iloc[0])
@@ -340,6 +360,8 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
         return figures.placement(tables["curves"][tables["curves"]["selection"] == "selected"], d / figure)
     curves = tables["curves"][tables["curves"]["selection"] == "selected"]
     stats = tables["stats"][tables["stats"]["selection"] == "selected"]
+    if figure == "lunar-e5":
+        return figures.control(curves, stats, ORDER[figure], d / figure, *BASELINE)
     return figures.control(curves, stats, ORDER[figure], d / figure)
 
 
@@ -394,10 +416,13 @@ def check(study: StudyContext, figure: str) -> list[str]:
     """Derive the figure's derived tables again from its raw ones, and simulate :data:`CHECK_RUNS`
     of its runs again; compare every value with the committed tables. The differences, one line each."""
     d = study.root / figure
-    if not (d / "runs.parquet").exists():
-        raise SweepError(f"{d / 'runs.parquet'} is missing: run dronefleet reproduce {figure}"
+    raw = d / f"{RAW[figure][0]}.parquet"
+    if not raw.exists():
+        raise SweepError(f"{raw} is missing: run dronefleet reproduce {figure}"
                          f"{' --quick' if study.quick else ''} first (it writes the table that --check compares with)")
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
+    if figure == sensitivity.FIGURE:
+        return _check_e4(study, tables)
     runs = tables["runs"]
     differences = _differ(figure, "runs", runs[["selected"]],
                           pd.DataFrame({"selected": experiments.selected(runs).to_numpy()}))
@@ -426,6 +451,20 @@ def check(study: StudyContext, figure: str) -> list[str]:
         differences += found
     if "snapshots" in tables:
         differences += _check_snapshots(study, figure, tables)
+    return differences
+
+
+def _check_e4(study: StudyContext, tables: dict[str, pd.DataFrame]) -> list[str]:
+    """lunar-e4's --check: ``effects`` derived again from ``runs``, and the runs of
+    :func:`dronefleet.lunar.sensitivity.rerun` simulated again."""
+    figure = sensitivity.FIGURE
+    runs = tables["runs_by_change"]
+    differences = _differ(figure, "effects", tables["effects"], sensitivity.effects(runs))
+    study.log(f"{figure}: derived tables {'identical' if not differences else f'{len(differences)} values differ'}")
+    for label, old, fresh in sensitivity.rerun(runs, grid(study, "e4")):
+        found = _differ(figure, f"{label} summary", old, fresh)
+        study.log(f"  {label}: {'identical' if not found else f'{len(found)} values differ'}")
+        differences += found
     return differences
 
 

@@ -183,7 +183,7 @@ def rerun(runs: pd.DataFrame, configs: Sequence[Any]) -> list[tuple[str, pd.Data
     return found
 
 
-METRIC_WORDS = {"resources": "resources returned F(T_run)", "deaths": "deaths", "mobile": "mobile robots at the end"}
+METRIC_WORDS = {"resources": "resources returned by the end", "deaths": "deaths", "mobile": "mobile robots at the end"}
 
 
 def draw_effects(table: pd.DataFrame, runs: int, path: str | os.PathLike) -> list[Path]:
@@ -191,7 +191,7 @@ def draw_effects(table: pd.DataFrame, runs: int, path: str | os.PathLike) -> lis
     down), a dot per scenario (its colour and marker) at the paired effect, whiskers +- one
     standard error; a line at no effect."""
     from ..figstyle import DOUBLE_COLUMN, MIN_FONT_SIZE, PRINT_RC, _dodge, _figure, figure_paths, letter_panels
-    from .figures import CONDITION_STYLES
+    from .figures import CONDITION_STYLES, WITHOUT
 
     changes = list(dict.fromkeys(table["change"]))
     scenarios = [s for s in SCENARIOS if s in set(table["condition"])]
@@ -209,7 +209,8 @@ def draw_effects(table: pd.DataFrame, runs: int, path: str | os.PathLike) -> lis
             ax.set_xlabel(METRIC_WORDS[metric])
             ax.grid(alpha=0.3, axis="x")
             ax.tick_params(labelsize=MIN_FONT_SIZE)
-        axes[0, 0].set_yticks(range(len(changes)), changes)
+        axes[0, 0].set_yticks(range(len(changes)), [WITHOUT if c == "eps=1" else c.replace("=", " = ")
+                                                     for c in changes])
         axes[0, 0].invert_yaxis()
         letter_panels(axes.flat)
         handles, labels = axes[0, 0].get_legend_handles_labels()

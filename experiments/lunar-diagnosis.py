@@ -6,7 +6,8 @@ gives the network timing, survival and foraging together (docs/lunar-readings.md
 tables: (1) the diagnosis at 1.25 and 0.125 m/s (p_move 5.8 W) in SOFT-RT and OPEN: the share of
 60-s stretches in which a mobile robot moves under 3 m net (by cause) and the cosine between each
 mobile robot's heading and its own guidance vector, and between that vector and the way to its
-region; (2) every reading tried, with the three criteria (dronefleet.lunar.diagnosis.criteria).
+region; (2) every reading tried, with the three criteria (dronefleet.lunar.diagnosis.criteria);
+(3) the reading chosen, configs/lunar-thesis.toml, in three layouts with 4 N runs each.
 Runs j = 0 .. N-1 of seed 0 (default N = 10); a few minutes on one core after the kernel compiles.
 """
 
@@ -23,6 +24,7 @@ from dronefleet.lunar.layout import build
 from dronefleet.lunar.params import LunarParams
 
 CONFIG = Path(__file__).resolve().parent.parent / "configs" / "lunar.toml"
+THESIS = CONFIG.with_name("lunar-thesis.toml")        # the reading chosen
 SLOW = {"v0": 0.125, "p_move": 5.8}          # A1 at the same energy per metre (E4)
 #: The readings tried, in SOFT-RT at 10 Wh: a name and the keys changed from configs/lunar.toml.
 READINGS = [
@@ -47,6 +49,13 @@ READINGS = [
     ("0.125 m/s, 5.8 W, weight_form bracket", {**SLOW, "weight_form": "bracket"}),
     ("0.125 m/s, 5.8 W, weight_form literal", {**SLOW, "weight_form": "literal"}),
     ("0.125 m/s, 5.8 W, fallback literal", {**SLOW, "fallback": "literal"}),
+    ("0.125 m/s, 5.8 W, leaving, soc0_low 0.8", {**SLOW, "experience": "leaving", "soc0_low": 0.8}),
+    ("0.125 m/s, 5.8 W, leaving, kappa_soft 5", {**SLOW, "experience": "leaving", "kappa_soft": 5.0}),
+    ("0.125 m/s, 5.8 W, leaving, kappa_soft 10", {**SLOW, "experience": "leaving", "kappa_soft": 10.0}),
+    ("0.125 m/s, 5.8 W, leaving, broadcast_velocity motion", {**SLOW, "experience": "leaving",
+                                                              "broadcast_velocity": "motion"}),
+    ("0.125 m/s, 5.8 W, leaving, redecide beacon_change", {**SLOW, "experience": "leaving",
+                                                           "redecide": "beacon_change"}),
     ("0.125 m/s, 58 W", {"v0": 0.125}),
     ("0.125 m/s, 58 W, recorded", {"v0": 0.125, "depletion": "recorded"}),
     ("0.125 m/s, 5.8 W, energy_scale 7.5, recorded", {**SLOW, "energy_scale": 7.5, "depletion": "recorded"}),
@@ -80,7 +89,8 @@ def diagnose(runs: int) -> str:
     for layout in ("SOFT-RT", "OPEN"):
         params = LunarParams(layout=layout)
         geometry = build(params)
-        for name, speed in (("1.25 m/s", {}), ("0.125 m/s", SLOW)):
+        for name, speed in (("1.25 m/s", {}), ("0.125 m/s", SLOW),
+                            ("0.125 m/s, leaving", {**SLOW, "experience": "leaving"})):
             run = _run(runs, frames=True, layout=layout, **speed)
             shares = diagnosis.stuck_shares(diagnosis.stretches(run.snapshots, geometry.field, params.r_body,
                                                                 params.ir_range))
@@ -113,15 +123,31 @@ def readings(runs: int) -> str:
                    "deaths/run", "depletions/run", "survival", "resources/run", "foraging", "of 3"], rows)
 
 
+def choice(runs: int) -> str:
+    """configs/lunar-thesis.toml in SOFT-RT, OPEN and HARD-RT: the criteria, and the spread of resources."""
+    rows = []
+    for layout in ("SOFT-RT", "OPEN", "HARD-RT"):
+        run = dronefleet.run(THESIS, runs=runs, layout=layout)
+        c = diagnosis.criteria(run.timeseries, run.summary)
+        resources = run.summary["resources"]
+        rows.append([layout, runs, c["t90_s"], c["t_peak_s"], c["decay"], c["mobile_rise"], c["deaths"],
+                     c["resources"], float(resources.median()), float((resources > 600).mean()),
+                     float(resources.std() / math.sqrt(runs)), c["all"]])
+    return _table(["configs/lunar-thesis.toml", "runs", "t90 s (median)", "t peak s", "decay", "mobile rise",
+                   "deaths/run", "resources/run", "median", "share of runs > 600", "s.e.", "all three"], rows)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=10, help="runs per configuration (default 10)")
-    parser.add_argument("--only", choices=("diagnosis", "readings"), help="print one part only")
+    parser.add_argument("--only", choices=("diagnosis", "readings", "choice"), help="print one part only")
     args = parser.parse_args(argv)
-    if args.only != "readings":
+    if args.only in (None, "diagnosis"):
         print(diagnose(args.runs), end="\n\n")
-    if args.only != "diagnosis":
-        print(readings(args.runs))
+    if args.only in (None, "readings"):
+        print(readings(args.runs), end="\n\n")
+    if args.only in (None, "choice"):
+        print(choice(4 * args.runs))
     return 0
 
 

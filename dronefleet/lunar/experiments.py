@@ -30,9 +30,8 @@ from ..config import SweepError, shipped_config
 
 __all__ = ["EXPERIMENTS", "CONDITION_COLUMNS", "RECORDS", "TABLES", "CURVE_METRICS", "TRIP_METRICS", "RUN_STATS",
            "BIN_S", "SELECTED", "OUT_OF", "CHUNK_RUNS", "grid_path", "condition_of", "condition_row", "selected_count",
-           "selected",
-           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "drives", "highlighted",
-           "chunks", "run_chunks", "run_configs"]
+           "selected", "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "drives",
+           "highlighted", "chunks", "run_chunks", "run_configs"]
 
 #: The experiments with a sweep file, ``configs/sweeps/lunar-<name>.toml`` (section 14).
 EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "eps1")

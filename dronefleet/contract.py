@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     import pyarrow
 
 __all__ = ["ENTRY_POINT_GROUP", "Field", "ScenarioContract", "REQUIRED", "OPTIONAL", "StudyContext", "FigureStudy",
-           "contract_problems", "study_problems", "check_configurations"]
+           "STUDY_OPTIONAL", "contract_problems", "study_problems", "check_configurations"]
 
 #: Entry-point group of scenarios installed from other packages: name -> the scenario object.
 ENTRY_POINT_GROUP = "dronefleet.scenarios"
@@ -186,6 +186,7 @@ class FigureStudy(Protocol):
     QUICK: str                        # what --quick changes, in words (for --help)
     #: table -> {column: kind}, kinds of :data:`dronefleet.reproduce.KINDS` ("text", "count", "number", ...)
     TABLE_COLUMNS: Mapping[str, Mapping[str, str]]
+    # Optional (:data:`STUDY_OPTIONAL`): MAY_BE_EMPTY, a tuple of the tables that may hold no rows.
 
     def run_together(self, study: StudyContext, figures: list[str]) -> None:
         """Run what several of ``figures`` share, once, before each one's ``tidy`` (may do nothing)."""
@@ -202,6 +203,10 @@ class FigureStudy(Protocol):
 
 #: The members of a :class:`FigureStudy`: attributes with their types, then its functions and their parameters.
 _STUDY_TYPES = {"TITLE": str, "QUICK": str, "FIGURES": tuple, "TABLE_COLUMNS": Mapping}
+#: The optional attributes of a :class:`FigureStudy` and their types. ``MAY_BE_EMPTY``: the tables that
+#: may hold no rows (a record of events a run need not have, such as deaths); ``reproduce`` refuses
+#: any other table without rows, as a broken run's.
+STUDY_OPTIONAL = {"MAY_BE_EMPTY": tuple}
 _STUDY_FUNCTIONS = {"run_together": ("study", "figures"), "tidy": ("study", "figure"), "draw": ("study", "figure"),
                     "check": ("study", "figure")}
 
@@ -210,7 +215,8 @@ def study_problems(study: object) -> list[str]:
     """What keeps ``study`` (a ``study()`` hook's result) from being a :class:`FigureStudy`, one
     phrase each (empty: it is one), checked without running anything."""
     problems = [f"its {name} is a {type(getattr(study, name, None)).__name__}, not a {kind.__name__}"
-                for name, kind in _STUDY_TYPES.items() if not isinstance(getattr(study, name, None), kind)]
+                for name, kind in {**_STUDY_TYPES, **STUDY_OPTIONAL}.items()
+                if (name in _STUDY_TYPES or hasattr(study, name)) and not isinstance(getattr(study, name, None), kind)]
     if isinstance(getattr(study, "FIGURES", None), tuple):
         problems += [f"its figure {figure!r} is not a string" for figure in study.FIGURES
                      if not isinstance(figure, str)]

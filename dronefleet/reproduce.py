@@ -258,6 +258,7 @@ def _any(values):
 #: what each value must be, in words, and whether nulls are allowed).
 KINDS = {
     "text": (_TEXT, _any, "text", False),
+    "text_or_null": (_TEXT, _any, "text or null", True),
     "integer": (_INTEGER, _any, "an integer", False),
     "count": (_INTEGER, lambda x: x >= 0, "an integer >= 0", False),
     # a week of a run: runs are at most 1000 weeks long (delivery's horizon_weeks)
@@ -295,12 +296,15 @@ def _read_parquet(path, figure, name):
     """The table ``name`` of ``figure`` at ``path``, every column of :data:`TABLE_COLUMNS` checked
     value by value; a file that is not parquet (corrupt, cut short), lacks a column or holds a value
     the figure cannot use is one line naming the file and the column."""
-    columns = owner(figure).TABLE_COLUMNS[name]
+    study = owner(figure)
+    columns = study.TABLE_COLUMNS[name]
     again = f"run dronefleet reproduce {figure} without --check or --redraw to write it again"
     try:
         schema = parquet_schema(path)
         rows = parquet_rows(path)
-        if rows == 0:  # every figure draws at least one run, and --check compares one
+        # every figure draws at least one run, and --check compares one: no rows is a broken run's table,
+        # unless the study records there events a run need not have (contract.STUDY_OPTIONAL)
+        if rows == 0 and name not in getattr(study, "MAY_BE_EMPTY", ()):
             raise DataError(f"table {str(path)!r} holds no rows")
         if rows > MAX_TABLE_ROWS:
             raise DataError(f"table {str(path)!r} holds {rows:,} rows; a figure's table holds at most "

@@ -75,10 +75,8 @@ class Context:
         frame.to_parquet(path, index=False)
         return path
 
-    def read_table(self, figure, name):
-        frame = pd.read_parquet(self.root / figure / f"{name}.parquet")
-        assert set(study.TABLE_COLUMNS[name]) <= set(frame.columns), name
-        return frame
+    def read_table(self, figure, name):  # as reproduce reads it: every column and the row count checked
+        return reproduce._read_parquet(self.root / figure / f"{name}.parquet", figure, name)
 
 
 def synthetic_summary(conditions=(("OPEN", 10.0, 0.05), ("SOFT-RT", 7.5, 0.05)), runs=50):
@@ -300,6 +298,42 @@ def test_check_re_derives_every_table_and_finds_a_changed_value(synthetic_result
     table.to_parquet(runs, index=False)
     found = study.check(context, "lunar-fig08")
     assert len(found) == 1 and found[0].startswith("lunar-fig08 OPEN run ") and "trips committed" in found[0]
+
+
+def test_fig08_holds_every_runs_records_and_check_compares_them(synthetic_results):
+    context, _ = synthetic_results
+    d = context.root / "lunar-fig08"
+    runs = pd.read_parquet(d / "runs.parquet")
+    per_run = {"robots": 50, "deaths": 1, "recharge_triggers": 1, "beacon_costs": 2}   # the synthetic's
+    for name, rows in per_run.items():
+        table = pd.read_parquet(d / f"{name}.parquet")
+        assert list(table.columns) == list(study.TABLE_COLUMNS[name]), name
+        assert len(table) == rows * len(runs), name
+        assert table.groupby(["condition", "run"]).size().eq(rows).all(), name
+    deaths = pd.read_parquet(d / "deaths.parquet")
+    best = runs[runs["condition"] == "OPEN"].sort_values(["resources", "run"]).iloc[-1]["run"]
+    row = deaths.index[(deaths["condition"] == "OPEN") & (deaths["run"] == best)][0]
+    t = float(deaths.loc[row, "t"])
+    deaths.loc[row, "t"] = t + 1.0
+    deaths.to_parquet(d / "deaths.parquet", index=False)
+    assert study.check(context, "lunar-fig08") == [
+        f"lunar-fig08 OPEN run {best} deaths row 0: t committed {t + 1.0!r}, re-derived {t!r}"]
+
+
+def test_fig08_without_deaths_or_recharging_interruptions_is_written_drawn_and_checked(fake_simulator, monkeypatch,
+                                                                                      tmp_path):
+    # --quick's short runs may have neither: those tables are empty, not refused as a broken run's
+    for name in ("_deaths", "_recharge_triggers"):
+        made = getattr(synthetic, name)
+        monkeypatch.setattr(synthetic, name, lambda params, runs, made=made: made(params, runs).slice(0, 0))
+    context = Context(tmp_path)
+    study.run_together(context, ["lunar-fig08"])
+    study.tidy(context, "lunar-fig08")
+    for name in study.MAY_BE_EMPTY:
+        assert len(context.read_table("lunar-fig08", name)) == 0, name
+    assert len(context.read_table("lunar-fig08", "robots")) > 0
+    assert (tmp_path / "lunar-fig08" / "lunar-fig08.png") in study.draw(context, "lunar-fig08")
+    assert study.check(context, "lunar-fig08") == []
 
 
 def test_check_without_tables_says_what_to_run(tmp_path):

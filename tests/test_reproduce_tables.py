@@ -84,6 +84,9 @@ REDRAWN = [
     ("fig10", "runs", lambda table: table.slice(0, 0), "holds no rows"),
     ("fig16", "outcomes", lambda table: table.slice(0, 0), "holds no rows"),
     ("fig17", "accuracy", lambda table: table.slice(0, 0), "holds no rows"),
+    # every run records its robots: no rows is a broken run's table (deaths need not happen: below)
+    ("lunar-fig08", "robots", lambda table: table.slice(0, 0), "holds no rows"),
+    ("lunar-fig08", "deaths", set_first("role", None), "column 'role' holds null at row 0"),
     ("fig18", "winner_soh", lambda table: pa.concat_tables([table, table.slice(0, 1)]), "repeats soc, mass_kg, "
                                                                                         "distance_m = "),
     ("fig20", "pending", set_first("arrival_week", 2**62), "column 'arrival_week' holds 4611686018427387904"),
@@ -108,6 +111,15 @@ def test_redraw_refuses_a_table_it_cannot_draw_in_one_line(figure, table, change
     before = sorted(tmp_path.rglob("*"))
     refused(["reproduce", figure, "--redraw", "--out", str(tmp_path)], capsys, str(path), fragment)
     assert sorted(tmp_path.rglob("*")) == before  # nothing drawn
+
+
+def test_tables_of_events_a_run_need_not_have_redraw_without_rows(tmp_path, capsys):
+    # lunar-fig08's deaths and recharging interruptions (none in --quick's short runs, say)
+    copy_tables("lunar-fig08", tmp_path)
+    for name in ("deaths", "recharge_triggers"):
+        tamper(tmp_path / "lunar-fig08" / f"{name}.parquet", lambda table: table.slice(0, 0))
+    assert cli.main(["reproduce", "lunar-fig08", "--redraw", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "lunar-fig08" / "lunar-fig08.png").is_file()
 
 
 def test_the_committed_tables_redraw(tmp_path, capsys):

@@ -11,6 +11,7 @@ import signal
 import subprocess
 import sys
 import time
+import types
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -404,3 +405,5 @@ def test_every_built_in_study_is_a_figure_study_by_the_check_installed_ones_meet
         "its FIGURES is a NoneType, not a tuple", "its TABLE_COLUMNS is a NoneType, not a Mapping",
         "its run_together does not take (study, figures)", "its tidy does not take (study, figure)",
         "its draw does not take (study, figure)", "its check does not take (study, figure)"]
+    # an optional member, if present, is of its type (reproduce looks a table's name up in it)
+    assert "its MAY_BE_EMPTY is a str, not a tuple" in study_problems(types.SimpleNamespace(MAY_BE_EMPTY="deaths"))

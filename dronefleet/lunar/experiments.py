@@ -6,8 +6,8 @@ condition (layout, battery, eps) holding its runs (``first_run`` .. ``first_run 
 :func:`run_configs` splits each configuration into chunks of :data:`CHUNK_RUNS` runs (run j
 draws the same per-robot streams whatever runs are beside it, section 13, so a chunk's rows are
 the whole configuration's), spreads them over the processes the caller passes (this package
-sits below the sweeps and their executors) and returns the tables the figures read, each with
-the condition columns :data:`CONDITION_COLUMNS`.
+sits below the sweeps and their executors) and returns the tables the figures read (:data:`TABLES`),
+each with the condition columns :data:`CONDITION_COLUMNS`.
 
 The statistics are pure functions of those tables (section 12, A35): per condition the runs
 with the largest resources returned F(T_run) (:func:`selected`: 30 of 50), the mean and sd at
@@ -28,15 +28,20 @@ import pandas as pd
 
 from ..config import SweepError, shipped_config
 
-__all__ = ["EXPERIMENTS", "CONDITION_COLUMNS", "CURVE_METRICS", "TRIP_METRICS", "RUN_STATS", "BIN_S", "SELECTED",
-           "OUT_OF", "CHUNK_RUNS", "grid_path", "condition_of", "condition_row", "selected_count", "selected",
-           "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "drives", "highlighted",
-           "chunks", "run_chunks", "run_configs"]
+__all__ = ["EXPERIMENTS", "CONDITION_COLUMNS", "RECORDS", "TABLES", "CURVE_METRICS", "TRIP_METRICS", "RUN_STATS",
+           "BIN_S", "SELECTED", "OUT_OF", "CHUNK_RUNS", "grid_path", "condition_of", "condition_row", "selected_count",
+           "selected", "curves", "rt_trips", "trip_bins", "median_runs", "run_stats", "HIGHLIGHTED_ROLES", "drives",
+           "highlighted", "chunks", "run_chunks", "run_configs"]
 
 #: The experiments with a sweep file, ``configs/sweeps/lunar-<name>.toml`` (section 14).
 EXPERIMENTS = ("e1", "e2", "e3", "e4", "e5", "eps1")
 #: The columns that say which condition a row belongs to (``condition``: their words).
 CONDITION_COLUMNS = ("experiment", "condition", "layout", "layout_scale", "battery_wh", "eps")
+#: The simulator's records of what decides the E2 claims (spec sections 19, 21; A36, A42), kept whole:
+#: per-robot totals, deaths, recharging interruptions (row 2) and the stored costs near T and R.
+RECORDS = ("robots", "deaths", "recharge_triggers", "beacon_costs")
+#: The tables :func:`run_configs` returns.
+TABLES = ("summary", "timeseries", "trips", "snapshots", *RECORDS)
 #: The time-series columns the figures draw (Figs 6-7, 6-11, the control and the alignment).
 CURVE_METRICS = ("resources", "interruptions", "rate", "n_mobile", "soc_sum", "n_beacons", "n_dead",
                  "alignment_T", "alignment_N", "alignment_R")
@@ -240,16 +245,15 @@ KEPT_LABELS = ("end",)
 
 def _tables_of(config: Any) -> dict[str, pd.DataFrame]:
     """The tables of one chunk the figures read (module level: it runs in worker processes):
-    summary and timeseries whole, the R-T trips (:func:`rt_trips`), and the snapshots (all of
-    them with frames, else only :data:`KEPT_LABELS`)."""
+    summary, timeseries and :data:`RECORDS` whole, the R-T trips (:func:`rt_trips`), and the
+    snapshots (all of them with frames, else only :data:`KEPT_LABELS`)."""
     from .simulate import simulate
 
     tables = {name: table.to_pandas() for name, table in simulate(config).items()}
     snapshots = tables["snapshots"]
     if not config.frames:
         snapshots = snapshots[snapshots["label"].isin(KEPT_LABELS)].reset_index(drop=True)
-    return {"summary": tables["summary"], "timeseries": tables["timeseries"],
-            "trips": rt_trips(tables["trips"], config.tau), "snapshots": snapshots}
+    return {**tables, "trips": rt_trips(tables["trips"], config.tau), "snapshots": snapshots}
 
 
 def run_chunks(configs: Iterable[Any], label: str, outcomes: Callable | None = None,
@@ -274,7 +278,7 @@ def run_chunks(configs: Iterable[Any], label: str, outcomes: Callable | None = N
 
 def run_configs(configs: Iterable[Any], experiment: str, outcomes: Callable | None = None,
                 done: dict | None = None) -> dict[str, pd.DataFrame]:
-    """Every run of every configuration of ``experiment`` as four tables.
+    """Every run of every configuration of ``experiment`` as the tables :data:`TABLES`.
 
     Parameters
     ----------
@@ -291,15 +295,15 @@ def run_configs(configs: Iterable[Any], experiment: str, outcomes: Callable | No
     Returns
     -------
     dict of pandas.DataFrame
-        ``summary``, ``timeseries``, ``trips`` (R-T only), ``snapshots``: the simulator's
-        columns after :data:`CONDITION_COLUMNS`, in the order of ``configs`` then run.
+        ``summary``, ``timeseries``, ``trips`` (R-T only), ``snapshots`` and :data:`RECORDS`: the
+        simulator's columns after :data:`CONDITION_COLUMNS`, in the order of ``configs`` then run.
         SweepError (one line) if a chunk fails or two configurations of one condition hold
         the same run index.
     """
     configs = list(configs)
     done = run_chunks(configs, experiment, outcomes, done)
     out = {}
-    for name in ("summary", "timeseries", "trips", "snapshots"):
+    for name in TABLES:
         frames = []
         for config in configs:
             head = condition_row(config, experiment)

@@ -12,7 +12,9 @@ sensitivity, ``lunar-e4``: per-run summaries only) is :mod:`dronefleet.lunar.sen
 Each figure writes under ``<out>/<figure>/`` its raw tables, one row per run (``runs``: the
 summary, with :data:`~dronefleet.lunar.experiments.CONDITION_COLUMNS` and whether the run is
 one of the selected 30), per run and record (``timeseries``), per R-T trip (``trips``) or per
-robot of a snapshot (``snapshots``), then what it draws, derived from them alone by
+robot of a snapshot (``snapshots``); ``lunar-fig08`` also the simulator's records of E1 and E2,
+:data:`~dronefleet.lunar.experiments.RECORDS` (deaths and recharging interruptions may be none:
+:data:`MAY_BE_EMPTY`), then what it draws, derived from them alone by
 :mod:`dronefleet.lunar.experiments` (``curves``, ``bins``, ``stats``, ``median``,
 ``highlighted``), then its files (PNG, PDF, SVG). ``--check`` derives the second kind again
 from the first and compares every value, and re-runs :data:`CHECK_RUNS` runs of each figure
@@ -85,7 +87,7 @@ FIG07_METRICS = ("resources", "interruptions", "rate", "n_mobile", "soc_sum")
 ALIGNMENT_METRICS = ("alignment_T", "alignment_N", "alignment_R")
 #: The raw tables of each figure (the derived ones are computed from these).
 RAW = {**dict.fromkeys(E0_FIGURES, ("runs", "snapshots")), "lunar-fig07": ("runs", "timeseries"),
-       "lunar-fig08": ("runs", "trips"), "lunar-fig09": ("runs", "snapshots"),
+       "lunar-fig08": ("runs", "trips", *experiments.RECORDS), "lunar-fig09": ("runs", "snapshots"),
        "lunar-fig11": ("runs", "timeseries"), "lunar-control": ("runs", "timeseries"),
        "lunar-e5": ("runs", "timeseries"), sensitivity.FIGURE: ("runs_by_change",)}
 #: Runs ``--check`` simulates again per figure (E1-E3: the best and the last of the first condition of
@@ -102,7 +104,7 @@ _SNAPSHOT = {"run": "count", "label": "text", "t": "number", "robot": "count", "
 def _kinds(schema: pa.Schema) -> dict[str, str]:
     """Each column of the simulator's table ``schema`` by the kind of its type."""
     return {field.name: "text" if pa.types.is_string(field.type) else "integer" if pa.types.is_integer(field.type)
-            else "number" for field in schema}
+            else "flag" if pa.types.is_boolean(field.type) else "number" for field in schema}
 
 
 _RUNS = {**_kinds(table_schemas()["summary"]), **_CONDITION, "run": "count", "seed": "integer", "resources": "count",
@@ -115,6 +117,9 @@ TABLE_COLUMNS = {
     "trips": {**_CONDITION, "run": "count", "origin": "text", "dest": "text", "t_entered": "number",
               **dict.fromkeys(TRIP_METRICS, "number")},
     "snapshots": {**_CONDITION, **_SNAPSHOT},
+    **{name: {**_CONDITION, **_kinds(table_schemas()[name]), "run": "count",
+              **({"region": "text_or_null"} if name == "deaths" else {})}  # null: a death outside every region
+       for name in experiments.RECORDS},
     "curves": {"condition": "text", "selection": "text", "metric": "text", "t": "number", "mean": "number",
                "sd": "number", "runs": "count"},
     "bins": {"condition": "text", "selection": "text", "metric": "text", "bin_start_s": "number", "mean": "number",
@@ -127,6 +132,8 @@ TABLE_COLUMNS = {
     "effects": {"change": "text", "condition": "text", "metric": "text", "default_mean": "number", "mean": "number",
                 "effect": "number", "se": "number", "runs": "count"},
 }
+#: The tables that may hold no rows: runs without deaths or recharging interruptions (--quick's short runs).
+MAY_BE_EMPTY = ("deaths", "recharge_triggers")
 #: The derived tables of each figure.
 DERIVED = {"lunar-fig05": ("highlighted",), "lunar-fig06": ("highlighted",), "lunar-fig07": ("curves", "stats"),
            "lunar-fig08": ("bins",), "lunar-fig09": ("median",), "lunar-fig11": ("curves",),
@@ -136,7 +143,8 @@ DERIVED = {"lunar-fig05": ("highlighted",), "lunar-fig06": ("highlighted",), "lu
 def _with_v0(frame: pd.DataFrame, configs: dict) -> pd.DataFrame:
     """``frame`` with the ``v0`` of its condition's config after the condition columns (the
     snapshots' vectors are drawn relative to it)."""
-    v0 = frame["condition"].map({condition: config.v0 for condition, config in configs.items()})
+    # float also for a frame without rows (a table of deaths may hold none), whose map has no values to type it
+    v0 = frame["condition"].map({condition: config.v0 for condition, config in configs.items()}).astype(np.float64)
     at = list(frame.columns).index("eps") + 1
     return pd.concat([frame.iloc[:, :at], v0.rename("v0"), frame.iloc[:, at:]], axis=1)
 
@@ -202,12 +210,9 @@ def _runs_table(summary: pd.DataFrame) -> pd.DataFrame:
     return summary.assign(selected=experiments.selected(summary).to_numpy())
 
 
-def _timeseries_table(timeseries: pd.DataFrame) -> pd.DataFrame:
-    return timeseries[[*TABLE_COLUMNS["timeseries"]]]
-
-
-def _trips_table(trips: pd.DataFrame) -> pd.DataFrame:
-    return trips[[*TABLE_COLUMNS["trips"]]]
+def _columns(frame: pd.DataFrame, name: str) -> pd.DataFrame:
+    """``frame`` with the columns of the figures' table ``name`` (:data:`TABLE_COLUMNS`), in their order."""
+    return frame[[*TABLE_COLUMNS[name]]]
 
 
 def _e0_snapshots(snapshots: pd.DataFrame, figure: str) -> pd.DataFrame:
@@ -271,9 +276,9 @@ def tidy(study: StudyContext, figure: str) -> None:
         runs = _runs_table(_gather(study, figure, "summary"))
         raw = {"runs": runs}
         if "timeseries" in RAW[figure]:
-            raw["timeseries"] = _timeseries_table(_gather(study, figure, "timeseries"))
+            raw["timeseries"] = _columns(_gather(study, figure, "timeseries"), "timeseries")
         if figure == "lunar-fig08":
-            raw["trips"] = _trips_table(_gather(study, figure, "trips"))
+            raw.update({name: _columns(_gather(study, figure, name), name) for name in ("trips", *experiments.RECORDS)})
         if figure == "lunar-fig09":
             medians = experiments.median_runs(runs)
             snapshots = _gather(study, figure, "snapshots")
@@ -365,8 +370,13 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     return figures.control(curves, stats, ORDER[figure], d / figure)
 
 
+def _missing(value) -> bool:
+    """NaN or null (a text column's null reads back as None, and a fresh one is NaN in pandas)."""
+    return value is None or value != value
+
+
 def _same(a, b):
-    return a == b or (a != a and b != b)  # NaN equals NaN
+    return a == b or (_missing(a) and _missing(b))
 
 
 def _differ(figure: str, label: str, old: pd.DataFrame, new: pd.DataFrame) -> list[str]:
@@ -442,11 +452,12 @@ def check(study: StudyContext, figure: str) -> list[str]:
             old = tables["timeseries"]
             found += _differ(figure, f"{label} timeseries",
                              _sorted(old[(old["condition"] == condition) & (old["run"] == run)], ["t"]),
-                             _sorted(_timeseries_table(fresh["timeseries"]), ["t"]))
-        if "trips" in tables:
-            old = tables["trips"]
-            found += _differ(figure, f"{label} trips", old[(old["condition"] == condition) & (old["run"] == run)]
-                             .reset_index(drop=True), _trips_table(fresh["trips"]))
+                             _sorted(_columns(fresh["timeseries"], "timeseries"), ["t"]))
+        for name in ("trips", *experiments.RECORDS):  # in the simulator's order of records
+            if name in tables:
+                old = tables[name]
+                found += _differ(figure, f"{label} {name}", old[(old["condition"] == condition) & (old["run"] == run)]
+                                 .reset_index(drop=True), _columns(fresh[name], name))
         study.log(f"  {label}: {'identical' if not found else f'{len(found)} values differ'}")
         differences += found
     if "snapshots" in tables:

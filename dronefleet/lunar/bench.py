@@ -19,6 +19,13 @@ CONFIGS = {
     "SOFT-RT": LunarParams(runs=4),
     "HARD-RT": LunarParams(layout="HARD-RT", runs=4),
     "OPEN": LunarParams(layout="OPEN", runs=4),
+    # the readings of the thesis as options (each within the target too), the last one configs/lunar-thesis.toml's
+    "decision_step_m=1": LunarParams(runs=4, decision_step_m=1.0),
+    "energy_scale=7.5, depletion=recorded": LunarParams(runs=4, energy_scale=7.5, depletion="recorded"),
+    "soc0_low=0.8": LunarParams(runs=4, soc0_low=0.8),
+    "kappa_soft=5": LunarParams(runs=4, kappa_soft=5.0),
+    "los_bodies": LunarParams(runs=4, los_bodies=True),
+    "thesis reading": LunarParams(runs=4, v0=0.125, p_move=5.8, experience="leaving"),
 }
 #: Seconds per hour-long 50-robot run (issue 22).
 TARGET_S = 0.3

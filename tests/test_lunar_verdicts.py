@@ -103,3 +103,23 @@ def test_the_conditions_are_those_of_the_e1_to_e3_sweep_files_on_the_base():
     assert names == ["OPEN", "HARD-RT", "SOFT-RT", "SOFT-RT 7.5 Wh", "SOFT-RT 12.5 Wh",
                      "HARD-NT", "SOFT-NT", "HARD-NR", "SOFT-NR"]
     assert all(c.runs == 50 and c.v0 == 0.125 for c in configs)
+
+
+def _rt_trips(lengths: dict[str, float], early_lengths: dict[str, float]) -> v.Runs:
+    """Two R-T trips per run and condition: one entered early (at 100 s), one late (at 3000 s)."""
+    tau = LunarParams().tau
+    rows = [{"condition": c, "run": j, "origin": "R", "dest": "T", "tick_entered": round(t / tau),
+             "length_m": length + 0.01 * np.cos(j)}
+            for c in lengths for j in RUNS
+            for t, length in ((100.0, early_lengths[c]), (3000.0, lengths[c]))]
+    configs = {c: LunarParams(layout="SOFT-RT", battery_wh=float(c.split()[1]) if " " in c else 10.0)
+               for c in lengths}
+    return v.Runs({"trips": pd.DataFrame(rows)}, configs)
+
+
+def test_trip_claims_read_the_late_trips_only():
+    # C43: the late R-T length falls as the battery grows; the early trips say the opposite and are ignored
+    late = {"SOFT-RT 7.5 Wh": 30.0, "SOFT-RT": 28.0, "SOFT-RT 12.5 Wh": 26.0}
+    early = {"SOFT-RT 7.5 Wh": 10.0, "SOFT-RT": 20.0, "SOFT-RT 12.5 Wh": 40.0}
+    assert v.CLAIMS["C43"](_rt_trips(late, early))[0] == v.HOLDS
+    assert v.CLAIMS["C43"](_rt_trips(early, late))[0] == v.FAILS

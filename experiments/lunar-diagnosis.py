@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Lunar, issue 28 item 3: why the guidance field does not lead robots at 0.125 m/s, and which reading
+"""Lunar: why the guidance field does not lead robots at 0.125 m/s, and which reading
 gives the network timing, survival and foraging together (docs/lunar-readings.md).
 
 ``python experiments/lunar-diagnosis.py [--runs N] [--only diagnosis|readings]`` prints, as Markdown

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Lunar, issue 28 item 4: a verdict for every claim of docs/lunar-thesis-checklist.md, at the defaults
+"""Lunar: a verdict for every claim of docs/lunar-thesis-checklist.md, at the defaults
 (configs/lunar.toml) and under the thesis reading (configs/lunar-thesis.toml).
 
 ``python experiments/lunar-verdicts.py [--jobs N] [--out DIR]`` runs E1-E3 (nine conditions of 50

@@ -1,4 +1,4 @@
-"""Lunar foraging with recharging: a beacon-guided swarm of rovers (Angyal, TU Delft MSc thesis 2024; issue 22).
+"""Lunar foraging with recharging: a beacon-guided swarm of rovers (Angyal, TU Delft MSc thesis 2024).
 
 The model is the spec LUNAR-FORAGING.md (docs/guide/lunar.md tells how it is run);
 :mod:`dronefleet.lunar.scenario` is its scenario ``lunar``, :mod:`dronefleet.lunar.kernel` its

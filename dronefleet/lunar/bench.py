@@ -2,7 +2,7 @@
 
 Times, after compilation, hour-long runs of 50 robots (56,250 ticks; the spec's section-3
 defaults) in one kernel call per configuration, and prints the seconds per run amortised over the
-runs (median of ``repeats`` calls; the issue's target: 0.3 s per run on one core), and the
+runs (median of ``repeats`` calls; the target: 0.3 s per run on one core), and the
 process's CPU seconds per run beside it (the wall time of a shared machine includes waiting for a
 core). Speed is measured here, never in a test.
 """
@@ -27,7 +27,7 @@ CONFIGS = {
     "los_bodies": LunarParams(runs=4, los_bodies=True),
     "thesis reading": LunarParams(runs=4, v0=0.125, p_move=5.8, experience="leaving"),
 }
-#: Seconds per hour-long 50-robot run (issue 22).
+#: Seconds per hour-long 50-robot run.
 TARGET_S = 0.3
 
 

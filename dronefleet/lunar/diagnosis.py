@@ -1,4 +1,4 @@
-"""Why a closely followed guidance field may not lead robots to the regions (issue 28, spec section 21).
+"""Why a closely followed guidance field may not lead robots to the regions (docs/lunar-readings.md).
 
 Functions over the lunar scenario's tables (``snapshots`` with ``frames = true``, ``timeseries``,
 ``summary``; columns as :func:`dronefleet.lunar.simulate.table_schemas` gives them):

@@ -1,4 +1,4 @@
-"""Parameters of the lunar foraging-with-recharging model (issue 22; spec LUNAR-FORAGING.md).
+"""Parameters of the lunar foraging-with-recharging model (docs/guide/lunar.md).
 
 :class:`LunarParams` holds one configuration: one field per config key, with the spec's defaults
 (section 3) and the options of section 17. It does not validate: ``dronefleet.lunar.scenario``

@@ -1,4 +1,4 @@
-"""The lunar foraging-with-recharging scenario behind the :mod:`dronefleet.scenarios` contract (issue 22).
+"""The lunar foraging-with-recharging scenario behind the :mod:`dronefleet.scenarios` contract.
 
 Config files are TOML naming the scenario and grouping keys in seven sections (run, world,
 robots, guidance, energy, records, options; ``configs/lunar.toml`` spells out and documents

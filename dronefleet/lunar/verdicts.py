@@ -1,4 +1,4 @@
-"""A verdict for every claim of docs/lunar-thesis-checklist.md (issue 28), from the runs of E1-E3.
+"""A verdict for every claim of docs/lunar-thesis-checklist.md, from the runs of E1-E3.
 
 :func:`experiment_runs` runs E1-E3 (the conditions of ``configs/sweeps/lunar-e1.toml``, ``-e2``,
 ``-e3``: nine conditions of 50 runs) on a base configuration and returns a :class:`Runs`: the

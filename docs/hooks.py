@@ -38,7 +38,8 @@ def _results_files() -> list[str]:
     page = ROOT / RESULTS / "README.md"
     figures = {posixpath.normpath(posixpath.join(RESULTS, target))
                for target, _ in LINK.findall(page.read_text(encoding="utf-8"))}
-    return [f"{RESULTS}/README.md", *sorted(f for f in figures if (ROOT / f).is_file())]
+    # a link back into docs/ is a page the site has already (on_page_markdown points it there)
+    return [f"{RESULTS}/README.md", *sorted(f for f in figures if f.startswith(f"{RESULTS}/") and (ROOT / f).is_file())]
 
 
 def on_files(files: Files, config) -> Files:

@@ -28,7 +28,8 @@ TINY = {
     "delivery": {"horizon_weeks": 0.02, "n_uavs": 3},
     "replenishment": {"trials": 2, "ticks": 300},
     "items": {"trials": 2, "steps": 50},
-    "lunar": {"runs": 2, "n_robots": 50, "duration_s": 60.0},  # fewer robots all become beacons: no trips
+    # fewer robots all become beacons (no trips); a small battery gives deaths and recharging interruptions
+    "lunar": {"runs": 2, "n_robots": 50, "duration_s": 60.0, "battery_wh": 0.5},
     "random_walk": {"n_robots": 3, "steps": 50},
 }
 NAMES = (f"installed{n}" for n in itertools.count())  # imports and entry points are cached: a name per test

@@ -30,6 +30,11 @@ def writing(path: str | os.PathLike) -> Iterator[None]:
         raise OutputError(f"cannot write {str(path)!r}: {error.strerror or error}") from None
 
 
+#: Prefix of the folder :func:`probe_folders` makes and removes at once: another process (a task of
+#: the same job array) may see it, and must not take it for a user's file.
+PROBE_PREFIX = ".dronefleet-probe-"
+
+
 def probe_folders(folders: Iterable[Path]) -> None:
     """Create ``folders`` (and their parents) if needed and check that files can be made in them;
     if one cannot, remove the folders made here and raise OutputError."""
@@ -41,7 +46,7 @@ def probe_folders(folders: Iterable[Path]) -> None:
                     raise NotADirectoryError(errno.ENOTDIR, "Not a directory")
                 made += [path for path in (folder, *folder.parents) if not path.exists()]  # deepest first
                 folder.mkdir(parents=True, exist_ok=True)
-                os.rmdir(tempfile.mkdtemp(prefix=".dronefleet-probe-", dir=folder))
+                os.rmdir(tempfile.mkdtemp(prefix=PROBE_PREFIX, dir=folder))
     except OutputError:
         for path in made:
             with suppress(OSError):

@@ -118,7 +118,7 @@ from urllib.parse import quote, unquote
 from . import console, scenarios
 from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, named_file, one_line, read_toml
 from .datafiles import DataError, check_columns, parquet_rows, parquet_schema, parse_json, read_json, read_parquet
-from .outputs import OutputError, check_output_file, probe_folders, writing
+from .outputs import PROBE_PREFIX, OutputError, check_output_file, probe_folders, writing
 from .scenarios import Scenario
 
 if TYPE_CHECKING:
@@ -801,7 +801,7 @@ def _check_owned(sweep: Sweep, out: Path) -> None:
         return
     ours = {*sweep.scenario.tables, LAYOUT_FILE, COLLECTED_FILE, f"{sweep.name}.sbatch", *SIDE_FOLDERS}
     try:
-        foreign = sorted(name for name in os.listdir(out) if name not in ours)
+        foreign = sorted(name for name in os.listdir(out) if name not in ours and not name.startswith(PROBE_PREFIX))
     except OSError as error:
         raise SweepError(f"cannot read the folder {out} ({error.strerror or error})") from None
     if foreign and _found_layout(out, sweep.scenario.tables) is None:

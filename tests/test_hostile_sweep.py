@@ -21,6 +21,7 @@ from conftest import Counted
 
 from dronefleet import cli, executors, sweeps as sw
 from dronefleet.delivery import simulation
+from dronefleet.outputs import PROBE_PREFIX
 
 ROOT = Path(__file__).resolve().parents[1]
 SMOKE = ROOT / "configs" / "sweeps" / "smoke.toml"   # 8 runs, 3 tasks of up to 3 runs
@@ -651,6 +652,16 @@ def test_a_folder_of_the_users_files_is_never_a_sweeps_dataset(tmp_path, capsys,
         assert "Traceback" not in err and len(err.splitlines()) == 1, err
         assert f"{mine} is not a sweep dataset and holds files dronefleet did not write ('notes.txt')" in err, err
         assert snapshot(tmp_path) == before
+
+
+def test_another_tasks_write_probe_in_the_folder_is_not_a_users_file(tmp_path, capsys, no_array):
+    # a task of the same job array checks that it can write there at the moment this one looks
+    empty, probed = tmp_path / "empty", tmp_path / "probed"
+    (empty / "smoke").mkdir(parents=True)
+    (probed / "smoke" / f"{PROBE_PREFIX}x1y2").mkdir(parents=True)
+    assert run_cli(["sweep", "status", str(SMOKE), "--results", str(empty)]) == 1   # nothing run yet
+    capsys.readouterr()
+    assert run_cli(["sweep", "status", str(SMOKE), "--results", str(probed)]) == 1, capsys.readouterr().err
 
 
 @pytest.mark.parametrize("stray", ["summary/notes.txt", "orders/rule=random/notes.txt", "summary/rule=random/mine",

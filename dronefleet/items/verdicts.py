@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import read_toml
+from ..pairs import paired
 from . import experiments
 from .params import Params, grid_side
 
@@ -180,15 +181,6 @@ class Data:
             values = value if isinstance(value, (list, tuple)) else [value]
             mask &= table[name].isin(values).to_numpy()
         return table[mask].set_index(PAIR_KEYS)[column].astype(float)
-
-
-def paired(a: pd.Series, b: pd.Series) -> tuple[float, float, int]:
-    """(mean, standard error, pairs) of ``a - b`` over the index both hold."""
-    d = (a - b).dropna()
-    n = len(d)
-    if n == 0:
-        return math.nan, math.nan, 0
-    return float(d.mean()), float(d.std(ddof=1) / math.sqrt(n)) if n > 1 else math.inf, n
 
 
 def _beyond(mean: float, se: float) -> bool:

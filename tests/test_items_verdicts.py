@@ -99,3 +99,28 @@ def test_the_extra_cells_are_the_study_sweeps_with_the_option_and_quick_shrinks_
     assert {(c.trials, c.steps) for _, c in full} == {(20, 1000)}
     quick = v.extra_configs(quick=True)
     assert {(c.trials, c.steps) for _, c in quick} == {(2, 200)} and len(quick) < len(full) / 3
+
+
+def test_check_re_derives_the_committed_verdicts_and_names_a_changed_one(tmp_path, capsys):
+    """``reproduce items-verdicts --check`` on copies of the committed tables: identical, then a
+    verdict edited in the copy is found, naming the row and both values."""
+    import shutil
+
+    from dronefleet import cli
+
+    results = Path(__file__).resolve().parent.parent / "results"
+    for figure in (*v.FIGURE_TABLES.values(), "items-ttests", "items-verdicts"):
+        (tmp_path / figure).mkdir()
+        for table in (results / figure).glob("*.parquet"):
+            shutil.copy(table, tmp_path / figure / table.name)
+    argv = ["reproduce", "items-verdicts", "--check", "--jobs", "1", "--out", str(tmp_path)]
+    assert cli.main(argv) == 0
+    path = tmp_path / "items-verdicts" / "verdicts.parquet"
+    table = pd.read_parquet(path)
+    table.loc[0, "verdict"] = v.FAILS
+    table.to_parquet(path)
+    capsys.readouterr()
+    assert cli.main(argv) == 1
+    captured = capsys.readouterr()
+    assert f"items-verdicts verdicts row 0: verdict committed '{v.FAILS}', re-derived '{v.HOLDS}'" in \
+        captured.out + captured.err

@@ -30,8 +30,8 @@ from . import experiments, verdicts
 from .experiments import CONFIG_COLUMNS, RESULT_COLUMNS, USES
 from .params import Params
 
-TITLE = ("multi-robot item delivery and foraging (Liemhetcharat et al. 2015), Figs 1-12 and the t-tests "
-         "(docs/items-model.md)")
+TITLE = ("multi-robot item delivery and foraging (Liemhetcharat et al. 2015), Figs 1-12, the t-tests and a "
+         "verdict on each of the paper's statements (docs/items-model.md, docs/items-paper-checklist.md)")
 FIGURES = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests", "items-verdicts")
 #: --quick: every sweep with fewer trials and steps, and only these values of the grid's keys.
 QUICK_CHANGES = {"trials": 2, "steps": 200}

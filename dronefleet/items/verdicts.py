@@ -295,9 +295,8 @@ def i4(data: Data) -> list[Result]:
     """SF's sleep time keeps changing in the run's second half."""
     t = data.extra[(data.extra["experiment"] == "e3-measures") & (data.extra["algorithm"] == "SF")]
     early = t["sf_change_early"] / t["sf_updates_early"].replace(0, np.nan)
-    late = (t["sf_change_late"] / t["sf_updates_late"].replace(0, np.nan)).dropna()
-    mean = float(late.mean())
-    se = float(late.std(ddof=1) / math.sqrt(len(late)))
+    late = t["sf_change_late"] / t["sf_updates_late"].replace(0, np.nan)
+    mean, se, _ = paired(late, 0.0 * late)
     return [Result(DEFAULTS, _beyond(mean - 1.0, se),
                    f"mean |change| of the sleep time per update: {early.mean():.2f} steps in the first half, "
                    f"{mean:.2f} (se {se:.2f}) in the second ({int(t['sf_updates_late'].sum())} updates)")]
@@ -533,10 +532,11 @@ def _fig12_options() -> list[tuple[str, dict, str, int]]:
     return out
 
 
-def _fig12_means(data: Data, source: str, algorithm: str, option: dict, n: int) -> tuple[float, float, pd.Series]:
+def _fig12_means(data: Data, source: str, algorithm: str, option: dict, n: int) -> tuple[pd.Series, pd.Series]:
+    """The share served at mu_l = 0.05 and at 0.15, by cell and trial (mu_l dropped: they pair)."""
     low = data.values(source, algorithm, option, n_robots=n, mu_l=0.05).droplevel("mu_l")
     high = data.values(source, algorithm, option, n_robots=n, mu_l=0.15).droplevel("mu_l")
-    return float(low.mean()), float(high.mean()), low - high
+    return low, high
 
 
 def i26(data: Data) -> list[Result]:
@@ -546,7 +546,7 @@ def i26(data: Data) -> list[Result]:
         ok, words = True, []
         for algorithm in ("GR", "CAS"):
             mine = "e5" if source == "e5-shared" and algorithm == "GR" else source
-            low, high, _ = _fig12_means(data, mine, algorithm, option, n)
+            low, high = (float(v.mean()) for v in _fig12_means(data, mine, algorithm, option, n))
             ok &= _similar(low, high)
             words.append(f"{algorithm} {low:.1f} -> {high:.1f} %")
         out.append(Result(label, ok, ", ".join(words)))
@@ -561,10 +561,10 @@ def i27(data: Data) -> list[Result]:
             continue                     # neither GRIC nor R reads these
         ok, words = True, []
         for algorithm in ("GRIC", "R"):
-            low, high, d = _fig12_means(data, source, algorithm, option, n)
-            se = float(d.std(ddof=1) / math.sqrt(len(d)))
-            ok &= _beyond(float(d.mean()), se)
-            words.append(f"{algorithm} {low:.1f} -> {high:.1f} % (drop {_fmt(float(d.mean()), se)})")
+            low, high = _fig12_means(data, source, algorithm, option, n)
+            mean, se, _ = paired(low, high)
+            ok &= _beyond(mean, se)
+            words.append(f"{algorithm} {low.mean():.1f} -> {high.mean():.1f} % (drop {_fmt(mean, se)})")
         out.append(Result(label, ok, ", ".join(words)))
     return out
 

@@ -52,18 +52,17 @@ def caption_letters(figure):
     return [f"({letter})" for letter in itertools.takewhile(named.__contains__, string.ascii_lowercase)]
 
 
-@pytest.fixture(scope="module")
-def study_figures(tmp_path_factory):
-    """Every figure of both studies redrawn (``reproduce --redraw``) from a copy of the committed
-    tables in this process (jobs=1: the figures are kept as drawn): {file name without suffix: (Figure, the files written)}."""
-    root = tmp_path_factory.mktemp("redrawn")
-    for figure in STUDY_FIGURES:
+def redrawn(root, names, modules):
+    """The figures ``names`` redrawn (``reproduce --redraw``) in this process (jobs=1: the figures
+    are kept as drawn) from a copy of their committed tables under ``root``, each drawing of
+    ``modules`` kept: ({file name without suffix: Figure}, {figure: the files written})."""
+    for figure in names:
         (root / figure).mkdir()
         for table in (ROOT / "results" / figure).glob("*.parquet"):
             shutil.copy(table, root / figure)
     kept = {}
     with pytest.MonkeyPatch.context() as patch:
-        for module in (figures, rfigures):
+        for module in modules:
             @contextmanager
             def keeping(path, *args, original=module._figure, **kwargs):
                 with original(path, *args, **kwargs) as (mpl, fig, axes):
@@ -71,30 +70,24 @@ def study_figures(tmp_path_factory):
                     yield mpl, fig, axes
 
             patch.setattr(module, "_figure", keeping)
-        drawn = reproduce.reproduce(list(STUDY_FIGURES), root, redraw=True, jobs=1, log=lambda *a, **k: None)
+        drawn = reproduce.reproduce(list(names), root, redraw=True, jobs=1, log=lambda *a, **k: None)
+    return kept, drawn
+
+
+@pytest.fixture(scope="module")
+def study_figures(tmp_path_factory):
+    """Every figure of the delivery and replenishment studies redrawn from the committed tables:
+    {file name without suffix: (Figure, the files written)}."""
+    kept, drawn = redrawn(tmp_path_factory.mktemp("redrawn"), STUDY_FIGURES, (figures, rfigures))
     return {name: (fig, drawn[name]) for name, fig in kept.items()}
 
 
 @pytest.fixture(scope="module")
 def items_figures(tmp_path_factory):
-    """Every items figure redrawn from a copy of the committed tables, as :func:`study_figures`:
-    {file name without suffix (the figure, or the figure and its option tag): (Figure, its files)}."""
+    """Every items figure redrawn from the committed tables: {file name without suffix (the
+    figure, or the figure and its option tag): (Figure, its files)}."""
     root = tmp_path_factory.mktemp("items")
-    for figure in ITEMS_FIGURES:
-        (root / figure).mkdir()
-        for table in (ROOT / "results" / figure).glob("*.parquet"):
-            shutil.copy(table, root / figure)
-    kept = {}
-
-    @contextmanager
-    def keeping(path, *args, original=ifigures._figure, **kwargs):
-        with original(path, *args, **kwargs) as (mpl, fig, axes):
-            kept[Path(path).stem] = fig
-            yield mpl, fig, axes
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(ifigures, "_figure", keeping)
-        reproduce.reproduce(list(ITEMS_FIGURES), root, redraw=True, jobs=1, log=lambda *a, **k: None)
+    kept, _ = redrawn(root, ITEMS_FIGURES, (ifigures,))
     return {name: (fig, sorted((root / name[:len("items-figNN")]).glob(f"{name}.*"))) for name, fig in kept.items()}
 
 

@@ -21,8 +21,8 @@ def names(paths):
     return [path.stem for path in paths]
 
 
-def test_there_are_a_delivery_and_a_replenishment_tutorial():
-    assert {"delivery-sweep", "replenishment"} <= set(names(TUTORIALS))
+def test_there_are_a_delivery_a_replenishment_and_an_items_tutorial():
+    assert {"delivery-sweep", "replenishment", "items"} <= set(names(TUTORIALS))
 
 
 @pytest.mark.parametrize("path", TUTORIALS, ids=names(TUTORIALS))

@@ -14,7 +14,9 @@ cells it runs) and ``verdicts.parquet`` (:mod:`dronefleet.items.verdicts`).
 
 Options (spec A2, A9): CAS runs under ``cas_variant = "max_expected"`` and ``"rate"``, the
 item-delivery figures under ``lam_hat_source = "value"`` (lam_hat = 0.5) and ``"mu"``; every
-figure that depends on them is drawn once per option, the option in its file name and title.
+figure that depends on them is drawn once per option: ``<figure>.png`` under the defaults,
+``<figure>-<tag>.png`` under the others (the tag names the keys that differ, e.g. ``cas-rate``),
+the option in words in the legend.
 """
 
 from __future__ import annotations
@@ -162,17 +164,23 @@ def select(runs: pd.DataFrame, option: dict) -> pd.DataFrame:
     return runs[mask].reset_index(drop=True)
 
 
+#: The options in words, for a figure's legend: key -> value -> words.
+OPTION_WORDS = {
+    "cas_variant": {"max_expected": "CAS scores the items expected", "rate": "CAS scores items per step travelled",
+                    "gr_no_earmark": "CAS as GRIC without ear-marking"},
+    "lam_hat_source": {"value": "robots assume 0.5 demands per step", "mu": "robots know the mean rate"},
+}
+
+
 def option_label(option: dict, delivery: bool) -> tuple[str, str]:
-    """(words for a title, a tag for a file name) of ``option``."""
-    words, tags = [], []
-    if "cas_variant" in option:
-        words.append(f'CAS cas_variant="{option["cas_variant"]}"')
-        tags.append(f"cas-{option['cas_variant']}")
-    if delivery and "lam_hat_source" in option:
-        words.append("lam_hat = 0.5 (A9 \"value\")" if option["lam_hat_source"] == "value"
-                     else "lam_hat = mu_l (A9 \"mu\")")
-        tags.append(f"lam-{option['lam_hat_source']}")
-    return ", ".join(words), "-".join(tags)
+    """(the option in words, for a legend; a tag for a file name: the keys whose value is not the
+    default, "" for the defaults) of ``option``. lam_hat_source counts in item delivery only."""
+    default = Params()
+    keys = [key for key in ("cas_variant", "lam_hat_source") if key in option
+            and (delivery or key != "lam_hat_source")]
+    words = ", ".join(OPTION_WORDS[key].get(option[key], f"{key} {option[key]}") for key in keys)
+    tag = "-".join(f"{key.split('_')[0]}-{option[key]}" for key in keys if option[key] != getattr(default, key))
+    return words, tag
 
 
 def ttest_table(runs: pd.DataFrame) -> pd.DataFrame:
@@ -233,19 +241,14 @@ def tidy(study: StudyContext, figure: str) -> None:
         study.write_table(ttest_table(runs), d / "ttests.parquet")
 
 
-#: The surfaces and slices: figure -> list of (file suffix, experiment, x, y or panel column, kind).
-DRAWINGS = {
-    "items-fig03": [("", None, "n_robots", "capacity", "surface")],
-    "items-fig05": [("", None, "n_robots", "capacity", "surface")],
-    "items-fig07": [("", None, "n_robots", "capacity", "surface")],
-    "items-fig09": [("a", "e4a", "n_robots", "capacity", "surface"), ("b", "e4b", "n_robots", "speed", "surface")],
-    "items-fig04": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig06": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig08": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig10": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig11": [("", None, "n_robots", "speed", "slices")],
-    "items-fig12": [("", None, "mu_l", "n_robots", "slices")],
-}
+#: The 3-D figures: figure -> its rows (experiment or None: all, x, y); Fig 7 has a row per sigma_e.
+SURFACES = {"items-fig03": [(None, "n_robots", "capacity")], "items-fig05": [(None, "n_robots", "capacity")],
+            "items-fig07": [(None, "n_robots", "capacity")],
+            "items-fig09": [("e4a", "n_robots", "capacity"), ("e4b", "n_robots", "speed")]}
+#: The slices: figure -> (x, the column of its panels).
+SLICES = {"items-fig04": ("n_robots", "capacity"), "items-fig06": ("n_robots", "capacity"),
+          "items-fig08": ("n_robots", "capacity"), "items-fig10": ("n_robots", "capacity"),
+          "items-fig11": ("n_robots", "speed"), "items-fig12": ("mu_l", "n_robots")}
 
 
 #: The most configurations a figure's table may hold (items-fig07 holds 3,200).
@@ -279,20 +282,24 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     if figure in ("items-ttests", "items-verdicts"):
         return figures.write_ttests(study.read_table(figure, figure[6:]), d / figure)
     runs = read_runs(study, figure)
+    delivery = bool((runs["mode"] == "delivery").any())
     files = []
-    for suffix, experiment, x, second, kind in DRAWINGS[figure]:
-        mine = runs if experiment is None else runs[runs["experiment"] == experiment]
-        delivery = bool((mine["mode"] == "delivery").any())
-        for option in options(mine):
-            words, tag = option_label(option, delivery)
-            name = "-".join(part for part in (f"{figure}{suffix}", tag) if part)
-            chosen = select(mine, option)
-            if kind == "surface":
-                panel = "sigma_e" if figure == "items-fig07" else None
-                files += figures.surfaces(chosen, d / f"{name}-surface", x, second, panel, words)
-                files += figures.heatmaps(chosen, d / f"{name}-heatmap", x, second, panel, words)
+    for option in options(runs):
+        words, tag = option_label(option, delivery)
+        name = d / "-".join(part for part in (figure, tag) if part)
+        chosen = select(runs, option)
+        if figure in SLICES:
+            files += figures.slices(chosen, name, *SLICES[figure], words)
+            continue
+        blocks = []
+        for experiment, x, y in SURFACES[figure]:
+            mine = chosen if experiment is None else chosen[chosen["experiment"] == experiment]
+            if figure == "items-fig07":
+                blocks += [figures.Block(mine[mine["sigma_e"] == value], x, y, figures.panel_title("sigma_e", value))
+                           for value in sorted(mine["sigma_e"].unique())]
             else:
-                files += figures.slices(chosen, d / name, x, second, words)
+                blocks.append(figures.Block(mine, x, y))
+        files += figures.surfaces(blocks, name, words)
     return files
 
 

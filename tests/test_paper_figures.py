@@ -30,7 +30,7 @@ STUDY_FIGURES = (*reproduce.DELIVERY_FIGURES, *reproduce.REPLENISHMENT_FIGURES)
 COLUMN_WIDTHS = {"single": (3.3, 3.6), "double": (6.8, 7.3)}
 
 
-ITEMS_FIGURES = tuple(figure for figure in istudy.FIGURES if figure != "items-ttests")
+ITEMS_FIGURES = tuple(figure for figure in istudy.FIGURES if figure not in ("items-ttests", "items-verdicts"))  # tables
 
 
 def caption(figure):

@@ -53,7 +53,7 @@ __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS
 NAME = "items"
 TABLES = ("summary", "robots")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.items.study`).
-FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
+FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests", "items-verdicts")
 SEED_KEY = "first_trial"
 SEEDS_REQUIRED = False
 

@@ -1,4 +1,5 @@
-"""``dronefleet reproduce items-fig01..items-fig12 items-ttests``: the items study's tables, drawings and check.
+"""``dronefleet reproduce items-fig01..items-fig12 items-ttests items-verdicts``: the items study's tables,
+drawings and check.
 
 The scenario's ``study()`` hook (:class:`dronefleet.contract.FigureStudy`), run with the
 :class:`~dronefleet.contract.StudyContext` of ``dronefleet reproduce`` (it reads the sweep files,
@@ -7,7 +8,9 @@ E1-E5 are the sweep files ``configs/sweeps/items-<experiment>.toml``; E0 (Figs 1
 here. Each figure writes under ``<out>/<figure>/``: ``runs.parquet`` (one row per configuration
 and trial: :data:`~dronefleet.items.experiments.CONFIG_COLUMNS`, trial, seed, generated, served,
 rate; the slices of the experiments it draws), Figs 1-2 ``curve.parquet`` / ``paths.parquet``,
-the t-tests ``ttests.parquet``, then draws its files from those tables alone.
+the t-tests ``ttests.parquet``, then draws its files from those tables alone. ``items-verdicts``
+reads the other figures' tables (not their experiments) and writes ``extra.parquet`` (the extra
+cells it runs) and ``verdicts.parquet`` (:mod:`dronefleet.items.verdicts`).
 
 Options (spec A2, A9): CAS runs under ``cas_variant = "max_expected"`` and ``"rate"``, the
 item-delivery figures under ``lam_hat_source = "value"`` (lam_hat = 0.5) and ``"mu"``; every
@@ -25,13 +28,13 @@ import pandas as pd
 
 from ..config import SweepError
 from ..contract import StudyContext, check_configurations, check_experiments
-from . import experiments
+from . import experiments, verdicts
 from .experiments import CONFIG_COLUMNS, RESULT_COLUMNS, USES
 from .params import Params
 
-TITLE = ("multi-robot item delivery and foraging (Liemhetcharat et al. 2015), Figs 1-12 and the t-tests "
-         "(docs/items-model.md)")
-FIGURES = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
+TITLE = ("multi-robot item delivery and foraging (Liemhetcharat et al. 2015), Figs 1-12, the t-tests and a "
+         "verdict on each of the paper's statements (docs/items-model.md, docs/items-paper-checklist.md)")
+FIGURES = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests", "items-verdicts")
 #: --quick: every sweep with fewer trials and steps, and only these values of the grid's keys.
 QUICK_CHANGES = {"trials": 2, "steps": 200}
 QUICK_KEEP = {"n_robots": (1, 5), "capacity": (5, 10, 15, 20)}
@@ -64,6 +67,12 @@ TABLE_COLUMNS = {
     "ttests": {"experiment": "text", "capacity": "key", "option": "text", "a": "text", "b": "text",
                "pairs": "count", "mean_a": "number", "mean_b": "number", "mean_diff": "number",
                "t_paired": "number", "p_paired": "number", "t_unpaired": "number", "p_unpaired": "number"},
+    "verdicts": {"statement": "text", "verdict": "text", "holds_under": "text", "option": "text", "passes": "text",
+                 "numbers": "text"},
+    "extra": {"experiment": "text", **{c: "text" if c in ("mode", "truth", "algorithm", "cas_variant", "lam_hat_source",
+                                                          "cas_targets") else "key"
+                                       for c in verdicts.EXTRA_CONFIG},
+              **{c: "count" for c in verdicts.MEASURE_COLUMNS if c != "rate"}, "rate": "number"},
 }
 #: The configurations `--check` re-runs per figure (every trial), as column values; each is in --quick's grid.
 CHECK_CONFIGS = {
@@ -199,9 +208,23 @@ def ttest_table(runs: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=list(TABLE_COLUMNS["ttests"]))
 
 
+def verdict_data(study: StudyContext, extra: pd.DataFrame) -> verdicts.Data:
+    """The committed tables the verdicts read (:data:`verdicts.FIGURE_TABLES`, the t-tests) and ``extra``."""
+    runs = {experiment: study.read_table(figure, "runs") for experiment, figure in verdicts.FIGURE_TABLES.items()}
+    return verdicts.Data(runs, study.read_table("items-ttests", "ttests"), extra)
+
+
 def tidy(study: StudyContext, figure: str) -> None:
     """Run (or take from this call's memo) the figure's experiments; write its tables."""
     d = study.figure_dir(figure)
+    if figure == "items-verdicts":
+        start = time.perf_counter()
+        extra = verdicts.extra_rows(verdicts.extra_configs(study.quick), study.map)
+        study.log(f"  items-verdicts: {extra['experiment'].nunique()} extra sets, {len(extra)} trials in "
+                  f"{time.perf_counter() - start:.1f} s")
+        study.write_table(extra, d / "extra.parquet")
+        study.write_table(verdicts.verdict_table(verdict_data(study, extra)), d / "verdicts.parquet")
+        return
     if figure in ("items-fig01", "items-fig02"):
         curve = experiments.logistic_curve()
         study.write_table(pd.DataFrame({"step": np.arange(len(curve)), "x": curve}), d / "curve.parquet")
@@ -256,8 +279,8 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     if figure == "items-fig02":
         return figures.logistic_paths(study.read_table(figure, "paths"), study.read_table(figure, "curve"),
                                       d / figure)
-    if figure == "items-ttests":
-        return figures.write_ttests(study.read_table(figure, "ttests"), d / figure)
+    if figure in ("items-ttests", "items-verdicts"):
+        return figures.write_ttests(study.read_table(figure, figure[6:]), d / figure)
     runs = read_runs(study, figure)
     delivery = bool((runs["mode"] == "delivery").any())
     files = []
@@ -304,11 +327,14 @@ def check(study: StudyContext, figure: str) -> list[str]:
     Returns the differences, one line each.
     """
     d = study.root / figure
-    main = {"items-fig01": "curve", "items-fig02": "paths", "items-ttests": "ttests"}.get(figure, "runs")
+    main = {"items-fig01": "curve", "items-fig02": "paths", "items-ttests": "ttests",
+            "items-verdicts": "verdicts"}.get(figure, "runs")
     if not (d / f"{main}.parquet").exists():
         raise SweepError(f"{d / f'{main}.parquet'} is missing: run dronefleet reproduce {figure}"
                          f"{' --quick' if study.quick else ''} first (it writes the table that --check compares with)")
     differences = []
+    if figure == "items-verdicts":
+        return _check_verdicts(study, figure)
     if figure in ("items-fig01", "items-fig02"):
         differences += _differ(figure, "curve", "x", study.read_table(figure, "curve")["x"],
                                experiments.logistic_curve())
@@ -353,3 +379,41 @@ def check(study: StudyContext, figure: str) -> list[str]:
                 differences += _differ(figure, "ttests", column, table[column].to_numpy(), again[column].to_numpy())
     return differences
 
+
+
+#: The extra cells `--check` re-runs (every trial), as (extra set, {config key: value}).
+CHECK_EXTRA = (("e3-measures", {"algorithm": "SF", "n_robots": 5, "capacity": 10}),
+               ("e4a-shared", {"n_robots": 5, "capacity": 20}))
+
+
+def _check_verdicts(study: StudyContext, figure: str) -> list[str]:
+    """Re-run :data:`CHECK_EXTRA` against ``extra.parquet``, then re-derive every verdict from the
+    committed tables and compare ``verdicts.parquet`` value for value."""
+    extra = study.read_table(figure, "extra")
+    differences = []
+    configs = verdicts.extra_configs(study.quick)
+    for name, where in CHECK_EXTRA:
+        config = next((c for n, c in configs if n == name and all(getattr(c, k) == v for k, v in where.items())),
+                      None)
+        label = ",".join([name, *(f"{k}={v}" for k, v in where.items())])
+        if config is None:
+            raise SweepError(f"items-verdicts: the extra cell {label} is not among its cells"
+                             f"{' (--quick)' if study.quick else ''}")
+        fresh = verdicts.extra_rows([(name, config)])
+        mine = _where(extra, {"experiment": name, **where}).sort_values("trial")
+        if len(mine) != len(fresh):
+            differences.append(f"{figure} {label}: {len(mine)} trials committed, {len(fresh)} re-run")
+            continue
+        for column in verdicts.MEASURE_COLUMNS:
+            differences += _differ(figure, label, column, mine[column].to_numpy(), fresh[column].to_numpy(),
+                                   [f"trial {t}" for t in mine["trial"]])
+        study.log(f"  {label}: {len(mine) * len(verdicts.MEASURE_COLUMNS)} values re-run")
+    table = study.read_table(figure, "verdicts")
+    again = verdicts.verdict_table(verdict_data(study, extra))
+    if len(again) != len(table):
+        differences.append(f"{figure}: {len(table)} rows committed, {len(again)} re-derived")
+    else:
+        for column in TABLE_COLUMNS["verdicts"]:
+            differences += _differ(figure, "verdicts", column, table[column].to_numpy(), again[column].to_numpy())
+    study.log(f"{figure}: {'identical' if not differences else f'{len(differences)} values differ'}")
+    return differences

@@ -42,6 +42,7 @@ import numpy as np
 import pandas as pd
 
 from ..config import read_toml
+from ..pairs import paired
 from . import experiments as ex
 from .layout import build
 
@@ -128,15 +129,6 @@ def experiment_runs(base: Any, outcomes: Callable | None = None) -> Runs:
 
 
 # ---------------------------------------------------------------- the rules of a verdict
-
-
-def paired(a: pd.Series, b: pd.Series) -> tuple[float, float, int]:
-    """(mean, standard error, n) of ``a - b`` over the runs (index) both hold a value for."""
-    d = (a - b).dropna()
-    n = len(d)
-    if n == 0:
-        return math.nan, math.nan, 0
-    return float(d.mean()), float(d.std(ddof=1) / math.sqrt(n)) if n > 1 else math.inf, n
 
 
 def sign_verdict(mean: float, se: float) -> str:

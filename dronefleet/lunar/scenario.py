@@ -63,7 +63,7 @@ NAME = "lunar"
 TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "deaths", "recharge_triggers", "beacon_costs")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.lunar.study`).
 FIGURES: tuple[str, ...] = (*(f"lunar-fig{k:02d}" for k in (3, 4, 5, 6, 7, 8, 9, 11)), "lunar-control", "lunar-e4",
-                            "lunar-e5")
+                            "lunar-e5", "lunar-verdicts")
 SEED_KEY = "first_run"
 SEEDS_REQUIRED = False
 
@@ -226,7 +226,8 @@ def check_replayable(config: Config) -> None:
 
 
 def study() -> Any:
-    """Figs 6-3 to 6-11, the eps = 1 control, E4 and E5 in ``dronefleet reproduce``: :mod:`dronefleet.lunar.study`."""
+    """Figs 6-3 to 6-11, the eps = 1 control, E4, E5 and the claims' verdicts in ``dronefleet reproduce``:
+    :mod:`dronefleet.lunar.study`."""
     from . import study as figures
 
     return figures

@@ -100,7 +100,7 @@ def table_pages() -> dict[str, str]:
                 if column is None or not column.doc.strip():
                     raise PluginError(f"the column {field.name!r} of the {name} table {table!r} has no "
                                       f"description: add it to the scenario's columns()")
-                lines.append(f"| `{field.name}` | {field.type} | {column.unit or '-'} | "
+                lines.append(f"| `{field.name}` | `{field.type}` | {column.unit or '-'} | "
                              f"{column.doc.replace('|', '&#124;')} |")
             lines.append("")
         pages[name] = "\n".join(lines)

@@ -164,3 +164,41 @@ def test_no_user_page_names_an_unshipped_document_or_an_issue():
              for pattern in USER_PAGES for path in sorted(ROOT.glob(pattern))
              if (found := unshipped_references(path.read_text(encoding="utf-8")))]
     assert not wrong, "\n".join(wrong)
+
+
+# ------------------------------------------------------------------ the help names the four studies
+
+STUDIES = {"delivery": "D4.4", "replenishment": "D4.4", "items": "Liemhetcharat", "lunar": "Angyal"}
+
+
+def test_help_of_dronefleet_run_names_every_scenario_and_its_study():
+    import pydoc
+
+    import dronefleet
+
+    text = pydoc.render_doc(dronefleet.run, renderer=pydoc.plaintext)
+    for name, study in STUDIES.items():
+        assert f'"{name}"' in text and study in text, name
+
+
+def test_the_command_lines_help_names_every_scenario():
+    import subprocess
+    import sys
+
+    shown = subprocess.run([sys.executable, "-m", "dronefleet", "--help"], capture_output=True, text=True,
+                           check=True).stdout
+    assert all(re.search(rf"\b{name}\b", shown) for name in STUDIES)
+
+
+def test_the_package_description_and_citation_name_the_four_studies():
+    import tomllib
+
+    import yaml
+
+    description = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["description"]
+    assert all(study in description for study in ("D4.4", "Liemhetcharat", "Angyal"))
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
+    titles = {reference["title"] for reference in citation["references"]}
+    assert {"Multi-Robot Item Delivery and Foraging: Two Sides of a Coin",
+            "Feasibility study of Energetics in Nature-inspired Foraging for Lunar Resource Exploitation",
+            "Deliverable 4.4: Virtual Machines for Swarm Control and Learning"} <= titles

@@ -4,6 +4,7 @@ Its tables pages list every column of every scenario, and its tutorial pages ren
 in a real browser (headless Chromium). Without the ``docs`` extra (pip install -e '.[docs]') these
 tests skip; with it, a missing Chromium fails them."""
 
+import html
 import inspect
 import os
 import re
@@ -130,3 +131,15 @@ def test_the_lunar_tutorial_renders_in_chromium(site, tmp_path):
     assert re.search(r"<h1[^>]*>Lunar foraging: runs, layouts, the beacon network and a replay<", dom)
     # code cells highlighted as Python, not shown as raw text
     assert re.search(r'<span class="n">dronefleet</span><span class="o">\.</span><span class="n">run</span>', dom)
+
+
+def test_no_page_of_the_site_names_an_unshipped_document_or_an_issue(site):
+    # the API pages too, made from the docstrings: every page as a reader sees its text
+    from test_docs import unshipped_references
+
+    wrong = {}
+    for page in sorted(site.rglob("*.html")):
+        markup = re.sub(r"<(script|style)\b.*?</\1>", "", page.read_text(encoding="utf-8"), flags=re.DOTALL)
+        if found := unshipped_references(html.unescape(re.sub(r"<[^>]+>", " ", markup))):
+            wrong[page.relative_to(site).as_posix()] = sorted(set(found))
+    assert not wrong

@@ -21,8 +21,8 @@ def names(paths):
     return [path.stem for path in paths]
 
 
-def test_there_are_a_delivery_and_a_replenishment_tutorial():
-    assert {"delivery-sweep", "replenishment"} <= set(names(TUTORIALS))
+def test_there_are_a_delivery_a_replenishment_and_a_lunar_tutorial():
+    assert {"delivery-sweep", "replenishment", "lunar"} <= set(names(TUTORIALS))
 
 
 @pytest.mark.parametrize("path", TUTORIALS, ids=names(TUTORIALS))

@@ -1,10 +1,11 @@
-"""The items study's figures (spec ITEM-DELIVERY.md section 12) from tidy tables alone.
+"""The items study's figures (Liemhetcharat et al. 2015, Figs 1-12) from tidy tables alone.
 
 Each function reads the tables :mod:`dronefleet.items.study` writes (one row per configuration
 and trial; Figs 1-2 one row per step) and draws one figure as PNG, PDF and SVG with the style
 of :mod:`dronefleet.figstyle` (the same tables give the same bytes). Each algorithm has its
 :data:`dronefleet.figstyle.ALGORITHM_STYLES` colour and marker in every figure. A figure that
-depends on an option (the CAS rule, A2; the robots' assumed rate, A9) says which in its title.
+depends on an option (the CAS rule, ``cas_variant``; the robots' assumed rate, ``lam_hat_source``) says which
+in its title.
 Nothing here imports the simulator.
 """
 
@@ -29,7 +30,7 @@ ORDER = ("GRIC", "GR", "R", "CAS", "AS", "ASTC", "SF")
 
 
 def rate_label(runs: pandas.DataFrame) -> str:
-    """What ``rate`` is in ``runs`` (spec 9, A19, A20)."""
+    """What ``rate`` is in ``runs``: % of generated items served, or items foraged under logistic truth."""
     if (runs["mode"] == "delivery").any():
         return "demands served (% of generated)"
     if (runs["truth"] == "logistic").any():

@@ -8,7 +8,8 @@ line: :func:`run` is ``dronefleet run`` (its :meth:`Run.save` writes the same by
 
 Configs and changes are given as on the command line. ``config`` (``base`` of a sweep) is
 None (the paper's delivery scenario), a registered scenario's name (its defaults:
-``"delivery"``, ``"replenishment"``, ``"items"``, ``"lunar"``) or the path of a TOML config file. Changes are config keys, bare
+``"delivery"``, ``"replenishment"``, ``"items"``, ``"lunar"``)
+or the path of a TOML config file. Changes are config keys, bare
 (``tau_minutes=20``, ``rule="random"``) or, in the ``set`` dict, also as ``section.key``
 (``set={"auction.rule": "random"}``); values have the types of a config file (an int is
 taken for a float, never the reverse). ``seed`` / ``seeds`` set the scenario's seed key

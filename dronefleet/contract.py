@@ -22,8 +22,8 @@ if TYPE_CHECKING:
     import pandas
     import pyarrow
 
-__all__ = ["ENTRY_POINT_GROUP", "Field", "Column", "ScenarioContract", "REQUIRED", "OPTIONAL", "StudyContext", "FigureStudy",
-           "STUDY_OPTIONAL", "contract_problems", "study_problems", "check_configurations"]
+__all__ = ["ENTRY_POINT_GROUP", "Field", "Column", "ScenarioContract", "REQUIRED", "OPTIONAL", "StudyContext",
+           "FigureStudy", "STUDY_OPTIONAL", "contract_problems", "study_problems", "check_configurations"]
 
 #: Entry-point group of scenarios installed from other packages: name -> the scenario object.
 ENTRY_POINT_GROUP = "dronefleet.scenarios"

@@ -113,8 +113,8 @@ COLUMNS = {
         "week": Column("week", "the week that ended (the last row of a run: the horizon)"),
         "t_s": Column("s", "the instant of the record"),
         "uav": Column("index", "the UAV"),
-        "soh": Column("1", "its battery's state of health, the share of the nominal capacity it has (0.5..1 by default; "
-                                  "unknown to the UAV)"),
+        "soh": Column("1", "its battery's state of health, the share of the nominal capacity it has "
+                           "(0.5..1 by default; unknown to the UAV)"),
         "w_distance": Column("1", "its policy's weight on the standardised distance"),
         "w_mass": Column("1", "its policy's weight on the standardised mass"),
         "w_soc": Column("1", "its policy's weight on the standardised state of charge"),

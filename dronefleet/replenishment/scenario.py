@@ -85,8 +85,9 @@ def table_schemas() -> dict[str, pyarrow.Schema]:
 
 
 _TRIAL = {"trial": Column("index", "the trial, numbered from 1; trial k draws from seed 876 k")}
-_PHASE_DOCS = {"workers": {"charging": "charging in the base or from a mobile charger", "to_work": "driving to the work area",
-                           "working": "working in the work area", "to_charge": "driving back to be charged"},
+_PHASE_DOCS = {"workers": {"charging": "charging in the base or from a mobile charger",
+                           "to_work": "driving to the work area", "working": "working in the work area",
+                           "to_charge": "driving back to be charged"},
                "chargers": {"charging": "charging in the base", "to_transfer": "driving to the transfer area",
                             "sharing": "handing energy to a worker", "to_base": "driving back to the base"}}
 #: What every column of :func:`table_schemas` holds, with its unit (the documentation site's table pages).

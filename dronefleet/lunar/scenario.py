@@ -56,7 +56,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "RUN_LIMITS",
            "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config",
-           "run_size", "table_schemas", "simulate", "format_summary", "describe", "label", "replay_data",
+           "run_size", "table_schemas", "columns", "simulate", "format_summary", "describe", "label", "replay_data",
            "check_replayable", "study"]
 
 NAME = "lunar"
@@ -148,6 +148,13 @@ def table_schemas() -> dict[str, pyarrow.Schema]:
     from .simulate import table_schemas as schemas
 
     return schemas()
+
+
+def columns() -> dict:
+    """What every column of the tables holds (:data:`dronefleet.lunar.columns.COLUMNS`)."""
+    from .columns import COLUMNS
+
+    return COLUMNS
 
 
 def simulate(config: Config) -> dict[str, pyarrow.Table]:

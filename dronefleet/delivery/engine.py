@@ -708,10 +708,11 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
 # (reference counting was 28 % of the paper run, docs/guide/benchmarks.md); inlined, numba prunes the pairs.
 @borrowing(inline="always")
 def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
-    """Jump over ticks before ``t_other`` (the next change of state) at which provably nobody bids; True if any were skipped.
+    """Jump over ticks before ``t_other`` at which provably nobody bids; True if any were skipped.
 
-    Each skipped tick still advertises (the position moves on, cyclically) and counts
-    as an auction; nothing else happens at them.
+    ``t_other`` is the next event that changes the state (a UAV's, an order's arrival; a
+    sample changes nothing a bid depends on). Each skipped tick still advertises (the position
+    moves on, cyclically) and counts as an auction; nothing else happens at them.
     """
     interval = params.advert_interval_s
     # Ticks before t_other, and at or before t_stop, so that a paused run holds exactly

@@ -115,7 +115,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from urllib.parse import quote, unquote
 
-from . import console, scenarios
+from . import console, designs, scenarios
 from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, named_file, one_line, read_toml
 from .datafiles import DataError, check_columns, parquet_rows, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import PROBE_PREFIX, OutputError, check_output_file, probe_folders, writing
@@ -141,7 +141,7 @@ MAX_RUNS = 100_000
 #: Longest sweep name: it names a folder and its job-array script (file names hold 255 bytes).
 MAX_NAME = 100
 
-_SECTIONS = ("sweep", "set", "grid")
+_SECTIONS = ("sweep", "set", "grid", "design")
 _SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task", SCENARIO_KEY)
 _SEED_RANGE_KEYS = ("start", "count")
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
@@ -195,6 +195,7 @@ class Sweep:
     runs_per_task: int
     runs: tuple[Run, ...]             # in task order
     text: str                         # the file's content, kept in collected.parquet
+    design: designs.Design | None = None  # a [design] sweep's sampled points (its products are then empty)
 
     @property
     def n_tasks(self) -> int:
@@ -209,7 +210,11 @@ class Sweep:
 
     def describe(self) -> str:
         """``3 rule x 6 tau_minutes x 20 seeds = 360 runs``; with ``[[grid]]``, the products summed:
-        ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown)."""
+        ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown); with
+        ``[design]``, ``sobol design: 64 samples of 4 keys = 640 points (631 distinct) x 2 seeds = 1262 runs``."""
+        if self.design is not None:
+            seeds = f"{len(self.seeds)} seed{'s' if len(self.seeds) != 1 else ''}"
+            return f"{self.design.describe()} x {seeds} = {len(self.runs)} runs"
         return f"{_factors(self.products, len(self.seeds))} = {len(self.runs)} runs"
 
 
@@ -445,7 +450,9 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
 
     fixed = _parameters(doc.get("set", {}), scenario, f"{path}: [set]")
     fixed.update(_parameters(dict(changes or {}), scenario, f"{path}: changes"))
-    products = _products(doc.get("grid"), scenario, path)
+    if "design" in doc and "grid" in doc:
+        raise SweepError(f"{path}: give [grid] (values to combine) or [design] (ranges to sample), not both")
+    products = [] if "design" in doc else _products(doc.get("grid"), scenario, path)
     for label, product in products:
         both = [k for k in product if k in fixed]
         if both:
@@ -454,6 +461,15 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     # without seeds (where the scenario allows it), one run per configuration at the base's seed value
     seeds = None if listed is None and not scenario.seeds_required else _seeds(listed, f"{path}: [sweep] seeds")
     per_point = 1 if seeds is None else len(seeds)
+    design = None
+    if "design" in doc:  # sampled here: its points are checked against the run limit before they are drawn
+        table = doc["design"]
+        ranges = _parameters(table.get("ranges", {}) if isinstance(table, dict) else {}, scenario,
+                             f"{path}: [design.ranges]")
+        design = designs.read_design(table, ranges, scenario, f"{path}: [design]", MAX_RUNS // per_point)
+        both = [k for k in design.keys if k in fixed]
+        if both:
+            raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in [design.ranges]", both)
     n_runs = sum(math.prod(len(values) for values in product.values()) for _, product in products) * per_point
     if n_runs > MAX_RUNS:
         factors = _factors([product for _, product in products], per_point)
@@ -475,28 +491,30 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
             scenario.replace(config, {key: seed})
         except ConfigError as error:
             raise SweepError(f"{path}: [sweep] seeds: {error}", error.keys) from None
-    keys = (*sorted({k for _, product in products for k in product}), key)
+    keys = (*(design.keys if design else sorted({k for _, product in products for k in product})), key)
+    # each grid cell, or each distinct point of the design (points that round alike share their run)
+    points = ([("[design]", changes) for changes in design.distinct()] if design else
+              [(label, dict(zip(product, point))) for label, product in products
+               for point in itertools.product(*product.values())])
     runs, given = [], {}   # given: each configuration -> the grid point that gave it first
-    for label, product in products:
-        for point in itertools.product(*product.values()):
-            changes = dict(zip(product, point))
-            where = f"{label} at {', '.join(f'{k} = {_show(v)}' for k, v in changes.items())}"
-            try:
-                at_point = scenario.replace(config, changes)
-            except ConfigError as error:
-                raise SweepError(f"{path}: {where}: {error}", error.keys) from None
-            if at_point in given:
-                raise SweepError(f"{path}: {where} is the configuration of {given[at_point]}: "
-                                 "a sweep runs each configuration once", list(changes))
-            given[at_point] = where
-            point_runs = [Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds]
-            if len(point_runs) > 1 and scenario.replicates(at_point) is not None:
-                _check_replicates(scenario, point_runs, f"{path}: [sweep] seeds at {where}")
-            runs.extend(point_runs)
+    for label, changes in points:
+        where = f"{label} at {', '.join(f'{k} = {_show(v)}' for k, v in changes.items())}"
+        try:
+            at_point = scenario.replace(config, changes)
+        except ConfigError as error:
+            raise SweepError(f"{path}: {where}: {error}", error.keys) from None
+        if at_point in given:
+            raise SweepError(f"{path}: {where} is the configuration of {given[at_point]}: "
+                             "a sweep runs each configuration once", list(changes))
+        given[at_point] = where
+        point_runs = [Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds]
+        if len(point_runs) > 1 and scenario.replicates(at_point) is not None:
+            _check_replicates(scenario, point_runs, f"{path}: [sweep] seeds at {where}")
+        runs.extend(point_runs)
     values = {k: tuple(dict.fromkeys(run.value(k) for run in runs)) for k in keys[:-1]}
     return Sweep(path.absolute(), name, scenario, tuple({k: tuple(v) for k, v in product.items()}
                                                        for _, product in products),
-                 values, seeds, runs_per_task, tuple(runs), text)
+                 values, seeds, runs_per_task, tuple(runs), text, design)
 
 
 # --------------------------------------------------------------------------- one run
@@ -1045,6 +1063,8 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
     with writing(out / LAYOUT_FILE):
         out.mkdir(parents=True, exist_ok=True)
         _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
+        if sweep.design is not None:
+            designs.write_samples(sweep.design, out)
     failures = {}
     for finished, (run, error, crash) in enumerate(results, start=1):
         if crash is not None:

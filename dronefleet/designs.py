@@ -184,11 +184,12 @@ def _factor(name: str, spec, default, where: str) -> Factor:
     return Factor(name, low, high, integer=integer)
 
 
-def read_design(table, ranges: dict[str, Any], scenario: Scenario, where: str, max_points: int) -> Design:
+def read_design(table, ranges: dict[str, Any], scenario: Scenario, where: str, max_runs: int,
+                n_seeds: int = 1) -> Design:
     """The design of a ``[design]`` table ``table``, whose ``ranges`` the caller has resolved to
     parameter names (``ranges``: name -> spec): validated, then sampled.
 
-    ``max_points``: the most points the sweep may hold (its run limit over its seeds), checked
+    ``max_runs``: the most runs a sweep may hold, each point running ``n_seeds`` times; checked
     before anything is sampled. SweepError (one line naming the key and what is allowed) on an
     unknown key or method, a count that is not allowed, a range whose low is not below its high,
     a key of the wrong kind, or too many points.
@@ -218,16 +219,17 @@ def read_design(table, ranges: dict[str, Any], scenario: Scenario, where: str, m
     if not _integer(levels) or levels < 2 or ("levels" in table and method != "morris"):
         raise SweepError(f"{where}: levels is an integer >= 2, for method = \"morris\" only, got {_show(levels)}")
     if not ranges:
-        raise SweepError(f"{where}.ranges is empty or missing: give at least one key = [low, high]")
+        raise SweepError(f"{where}: ranges is empty or missing: give [design.ranges] with at least one "
+                         "key = [low, high]")
     factors = tuple(_factor(name, spec, scenario.defaults[name], f"{where}.ranges")
                     for name, spec in sorted(ranges.items()))
     if method == "sobol" and len(factors) < 2:
         raise SweepError(f"{where}: a sobol design needs at least two keys in [design.ranges]")
     count = n_points(method, samples, len(factors), second_order)
-    if count > max_points:
+    if count * n_seeds > max_runs:
         raise SweepError(f"{where}: {method} with samples = {samples} over {len(factors)} keys gives {count:,} "
-                         f"points; with the sweep's seeds at most {max_points:,} fit in one sweep: take fewer "
-                         "samples or seeds")
+                         f"points x {n_seeds} seed{'s' if n_seeds != 1 else ''} = {count * n_seeds:,} runs; a sweep "
+                         f"may hold at most {max_runs:,} runs: take fewer samples or seeds")
     unit = _sample(method, samples, len(factors), sampling_seed, second_order, levels)
     columns = [factor.values(unit[:, k]) for k, factor in enumerate(factors)]
     return Design(method, samples, sampling_seed, second_order, levels, factors, unit, tuple(zip(*columns)))

@@ -57,12 +57,17 @@ so the author's order is the run order. A configuration given twice is refused. 
 enumerated in that order, the last key varying fastest and seeds innermost. Task ``k`` of a
 job array (0-based) holds runs ``[k * runs_per_task, (k + 1) * runs_per_task)``.
 
+``[design]``, in place of ``[grid]``, samples points from ranges of keys (:mod:`dronefleet.designs`):
+each distinct point is a run like a grid cell (its keys, sorted, are the partition keys), in
+sample order, seeds innermost.
+
 The dataset of a sweep, under ``<results>/<name>/``::
 
     <table>/<key>=<value>/.../<seed key>=<N>/part-0.parquet   one file per run and table
     _failed/<run id>.json                               runs that raised or whose worker died, with the error
     _layout.json                                        the partition keys and scenario: a sweep of others is refused
     collected.parquet                                   `sweep collect`: each run's summary rows
+    samples.parquet                                     a [design]'s points, in sample order (`sweep run`)
     <name>.sbatch, _logs/                               `sweep plan`: job-array script, its logs
 
 ``<table>`` is each of the scenario's tables (delivery: ``orders, attempts, fleet,
@@ -466,7 +471,7 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
         table = doc["design"]
         ranges = _parameters(table.get("ranges", {}) if isinstance(table, dict) else {}, scenario,
                              f"{path}: [design.ranges]")
-        design = designs.read_design(table, ranges, scenario, f"{path}: [design]", MAX_RUNS // per_point)
+        design = designs.read_design(table, ranges, scenario, f"{path}: [design]", MAX_RUNS, per_point)
         both = [k for k in design.keys if k in fixed]
         if both:
             raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in [design.ranges]", both)

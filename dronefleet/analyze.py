@@ -166,7 +166,7 @@ def indices(design: designs.Design, points: pandas.DataFrame, metrics: tuple[str
             from SALib.analyze import morris
 
             found = morris.analyze(problem, design.unit, y, num_resamples=resamples, conf_level=CONFIDENCE,
-                                   num_levels=design.levels, seed=BOOTSTRAP_SEED)
+                                   num_levels=design.morris_levels, seed=BOOTSTRAP_SEED)
             rows += _rows(metric, "mu_star", keys, found["mu_star"], found["mu_star_conf"])
             rows += _rows(metric, "mu", keys, found["mu"])
             rows += _rows(metric, "sigma", keys, found["sigma"])

@@ -24,7 +24,7 @@ sobol      Saltelli's cross-sampling of a scrambled Sobol'  N (2D + 2), or N (D 
            second- and total-order indices                  false``; N a power of 2
 morris     N trajectories of Morris's one-at-a-time         N (D + 1)
            screening (SALib ``sample.morris``) on
-           ``levels`` levels (default 4)
+           ``morris_levels`` levels (default 4)
 lhs        Latin hypercube (``scipy.stats.qmc``)            N
 sobol-seq  a scrambled Sobol' sequence (``scipy.stats.qmc``) N, a power of 2
 ========== ================================================ =====================
@@ -57,7 +57,7 @@ if TYPE_CHECKING:
 #: The sampling methods of a ``[design]``.
 METHODS = ("sobol", "morris", "lhs", "sobol-seq")
 #: The keys of ``[design]``.
-DESIGN_KEYS = ("method", "samples", "sampling_seed", "ranges", "second_order", "levels")
+DESIGN_KEYS = ("method", "samples", "sampling_seed", "ranges", "second_order", "morris_levels")
 #: In a dataset folder, a design's points in sample order (``sample``, each key's value, its unit coordinate).
 SAMPLES_FILE = "samples.parquet"
 #: The metadata key of :data:`SAMPLES_FILE` that holds the design (JSON).
@@ -104,7 +104,7 @@ class Design:
     samples: int                      # base samples N
     sampling_seed: int
     second_order: bool                # sobol: second-order indices too (N (2D + 2) points, not N (D + 2))
-    levels: int                       # morris: levels of its grid
+    morris_levels: int                # morris: the levels of each key on its grid of the unit cube
     factors: tuple[Factor, ...]       # sorted by name
     unit: numpy.ndarray = field(compare=False, repr=False)     # (points, D): the points in the unit cube
     points: tuple[tuple, ...] = field(compare=False, repr=False)  # each point's config values, by factor
@@ -127,7 +127,7 @@ class Design:
     def to_dict(self) -> dict:
         """The design as the dataset records it (JSON)."""
         return {"method": self.method, "samples": self.samples, "sampling_seed": self.sampling_seed,
-                "second_order": self.second_order, "levels": self.levels,
+                "second_order": self.second_order, "morris_levels": self.morris_levels,
                 "ranges": {factor.name: factor.to_dict() for factor in self.factors}}
 
     def problem(self) -> dict:
@@ -215,9 +215,10 @@ def read_design(table, ranges: dict[str, Any], scenario: Scenario, where: str, m
     second_order = table.get("second_order", True)
     if not isinstance(second_order, bool) or ("second_order" in table and method != "sobol"):
         raise SweepError(f"{where}: second_order is true or false, for method = \"sobol\" only")
-    levels = table.get("levels", 4)
-    if not _integer(levels) or levels < 2 or ("levels" in table and method != "morris"):
-        raise SweepError(f"{where}: levels is an integer >= 2, for method = \"morris\" only, got {_show(levels)}")
+    morris_levels = table.get("morris_levels", 4)
+    if not _integer(morris_levels) or morris_levels < 2 or ("morris_levels" in table and method != "morris"):
+        raise SweepError(f"{where}: morris_levels is an integer >= 2, for method = \"morris\" only, "
+                         f"got {_show(morris_levels)}")
     if not ranges:
         raise SweepError(f"{where}: ranges is empty or missing: give [design.ranges] with at least one "
                          "key = [low, high]")
@@ -230,12 +231,13 @@ def read_design(table, ranges: dict[str, Any], scenario: Scenario, where: str, m
         raise SweepError(f"{where}: {method} with samples = {samples} over {len(factors)} keys gives {count:,} "
                          f"points x {n_seeds} seed{'s' if n_seeds != 1 else ''} = {count * n_seeds:,} runs; a sweep "
                          f"may hold at most {max_runs:,} runs: take fewer samples or seeds")
-    unit = _sample(method, samples, len(factors), sampling_seed, second_order, levels)
+    unit = _sample(method, samples, len(factors), sampling_seed, second_order, morris_levels)
     columns = [factor.values(unit[:, k]) for k, factor in enumerate(factors)]
-    return Design(method, samples, sampling_seed, second_order, levels, factors, unit, tuple(zip(*columns)))
+    return Design(method, samples, sampling_seed, second_order, morris_levels, factors, unit, tuple(zip(*columns)))
 
 
-def _sample(method: str, samples: int, n_keys: int, seed: int, second_order: bool, levels: int) -> numpy.ndarray:
+def _sample(method: str, samples: int, n_keys: int, seed: int, second_order: bool,
+            morris_levels: int) -> numpy.ndarray:
     """The points of a design in the unit cube, shape (points, n_keys), from the seeded sampler."""
     from scipy.stats import qmc
 
@@ -247,7 +249,7 @@ def _sample(method: str, samples: int, n_keys: int, seed: int, second_order: boo
     if method == "morris":
         from SALib.sample import morris
 
-        return morris.sample(problem, samples, num_levels=levels, seed=seed)
+        return morris.sample(problem, samples, num_levels=morris_levels, seed=seed)
     if method == "lhs":
         return qmc.LatinHypercube(d=n_keys, seed=seed).random(samples)
     return qmc.Sobol(d=n_keys, scramble=True, seed=seed).random(samples)

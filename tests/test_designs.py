@@ -90,7 +90,7 @@ def test_sobol_indices_of_the_ishigami_function_are_its_known_ones():
 
 
 def test_morris_screening_of_a_linear_function_gives_its_slopes_per_whole_range():
-    design = unit_design({"method": "morris", "samples": 20, "levels": 4},
+    design = unit_design({"method": "morris", "samples": 20, "morris_levels": 4},
                          {"a": [0.0, 2.0], "b": [10.0, 11.0], "c": [5.0, 6.0]})
     points = pd.DataFrame(design.points, columns=list(design.keys))
     points["y"] = 3.0 * points["a"] - 4.0 * points["b"]  # c does nothing
@@ -147,7 +147,7 @@ def test_points_that_round_alike_share_one_run(tmp_path):
     ('method = "sobol"\nsamples = 32768', None, "gives 196,608 points x 2 seeds = 393,216 runs; a sweep may hold at most 100,000 runs"),
     ('method = "sobol"\nsamples = 100', None, "samples = 100: a sobol design takes a power of 2"),
     ('method = "lhs"\nsamples = 1', None, "samples must be an integer >= 2, got 1"),
-    ('method = "lhs"\nsamples = 4\nlevels = 6', None, 'levels is an integer >= 2, for method = "morris" only'),
+    ('method = "lhs"\nsamples = 4\nmorris_levels = 6', None, 'morris_levels is an integer >= 2, for method = "morris" only'),
     ('method = "lhs"\nsamples = 4\nrepeats = 2', None, "unknown key 'repeats'. Allowed: method, samples"),
     ('method = "lhs"\nsamples = 4', 'n_chargers = [1.5, 3]\n', "n_chargers must be a range [low, high] of two integers"),
     ('method = "lhs"\nsamples = 4', 'strategy = ["mobile"]\n', "strategy is a word: give its levels"),

@@ -50,8 +50,9 @@ INDICES_FILE = "sensitivity.parquet"
 CONFIDENCE = 0.95
 #: Default bootstrap resamples of the intervals.
 RESAMPLES = 1000
-#: The seed of the bootstrap: the same points give the same intervals.
-BOOTSTRAP_SEED = 0
+#: The seed of the bootstrap: the same points give the same intervals. Not 0: SALib's Sobol'
+#: analysis takes a seed of 0 for none, and draws its resamples from fresh entropy.
+BOOTSTRAP_SEED = 1
 #: The methods whose points this analysis takes, and the indices each gives (in table order).
 INDICES = {"sobol": ("S1", "ST", "S2"), "morris": ("mu_star", "mu", "sigma")}
 #: What each index is, for the printed table and the figure's legend.
@@ -212,9 +213,10 @@ def sensitivity(sweep: str | os.PathLike | sweeps.Sweep, metrics, results: str |
 
 
 def draw(table: pandas.DataFrame, method: str, path: str | os.PathLike) -> list[Path]:
-    """One panel per metric (lettered when several, three to a row): a horizontal bar per key
-    and first- or total-order index (Sobol': ``S1``, ``ST``; Morris: ``mu_star``, ``sigma``), with
-    its 95 % interval as whiskers where it has one. Print size, no text below 7 pt."""
+    """One panel per metric (lettered when several; three to a row, four as two rows of two): a
+    horizontal bar per key and first- or total-order index (Sobol': ``S1``, ``ST``; Morris:
+    ``mu_star``, ``sigma``), with its 95 % interval as whiskers where it has one. Print size, no
+    text below 7 pt."""
     import numpy as np
 
     shown = ("S1", "ST") if method == "sobol" else ("mu_star", "sigma")
@@ -222,7 +224,7 @@ def draw(table: pandas.DataFrame, method: str, path: str | os.PathLike) -> list[
     hatches = {shown[0]: "", shown[1]: "//"}
     metrics = list(dict.fromkeys(table["metric"]))
     keys = list(dict.fromkeys(table["key"][table["index"] == shown[0]]))
-    ncols = min(len(metrics), 3)
+    ncols = 2 if len(metrics) == 4 else min(len(metrics), 3)  # four panels: two rows of two
     nrows = math.ceil(len(metrics) / ncols)
     width = SINGLE_COLUMN if len(metrics) == 1 else DOUBLE_COLUMN
     height = nrows * (0.22 * len(keys) * len(shown) / 2 + 0.9) + 0.35

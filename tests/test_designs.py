@@ -89,6 +89,16 @@ def test_sobol_indices_of_the_ishigami_function_are_its_known_ones():
     assert len(table) == 3 + 3 + 3
 
 
+@pytest.mark.parametrize("method", ["sobol", "morris"])
+def test_the_same_points_give_the_same_intervals(method):
+    design = unit_design({"method": method, "samples": 16}, {"x1": [-PI, PI], "x2": [-PI, PI], "x3": [-PI, PI]})
+    points = pd.DataFrame(design.points, columns=list(design.keys))
+    points["y"] = ishigami(points["x1"], points["x2"], points["x3"])
+    first = analyze.indices(design, points, ("y",), resamples=20)
+    assert first["ci_low"].notna().any()
+    pd.testing.assert_frame_equal(first, analyze.indices(design, points, ("y",), resamples=20))
+
+
 def test_morris_screening_of_a_linear_function_gives_its_slopes_per_whole_range():
     design = unit_design({"method": "morris", "samples": 20, "morris_levels": 4},
                          {"a": [0.0, 2.0], "b": [10.0, 11.0], "c": [5.0, 6.0]})

@@ -11,9 +11,10 @@ None (the paper's delivery scenario), a registered scenario's name (its defaults
 ``"replenishment"``) or the path of a TOML config file. Changes are config keys, bare
 (``tau_minutes=20``, ``rule="random"``) or, in the ``set`` dict, also as ``section.key``
 (``set={"auction.rule": "random"}``); values have the types of a config file (an int is
-taken for a float, never the reverse). ``seed`` / ``seeds`` set the scenario's seed key
-(delivery ``seed``; replenishment ``first_trial``: a run holds trials ``first_trial`` ..
-``first_trial + trials - 1``). Bad arguments raise :class:`dronefleet.config.ConfigError`
+taken for a float, never the reverse). ``seed`` / ``seeds`` set the root seed, as ``dronefleet
+run --seed`` and a sweep file's ``seeds`` do (delivery, items, lunar); replenishment has none and
+refuses them: its trials ``first_trial`` .. ``first_trial + trials - 1`` are its streams. Bad
+arguments raise :class:`dronefleet.config.ConfigError`
 (a ``ValueError``) with a one-line message naming the value and what is allowed, before
 anything is simulated.
 
@@ -69,6 +70,8 @@ def _changes(scenario: Scenario, fixed: Mapping[str, Any] | None, overrides: Map
                           "e.g. set={'auction.rule': 'random'}")
     given = [*(fixed or {}).items(), *overrides.items()]
     if seed is not None:
+        if scenario.seed_key is None:
+            raise scenario.seed_refusal(f"seed={_show(seed)}")
         given.append((scenario.seed_key, seed))
     changes: dict[str, Any] = {}
     for key, value in given:
@@ -187,9 +190,10 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
         name (``"delivery"``, ``"replenishment"``, or one installed from another package): its
         defaults; else a TOML config file of any scenario (it names its own).
     seed : int, optional
-        The scenario's seed key: delivery's ``seed`` (all randomness derives from it,
-        0 .. 2**63 - 1), replenishment's ``first_trial`` (trial k uses seed 876 k).
-        Default: the config's (delivery 0, replenishment 1).
+        The root seed, as ``dronefleet run --seed``: all randomness of a delivery, items or
+        lunar run derives from it. Default: the config's. Refused for replenishment, whose
+        trials are its streams (trial k uses seed 876 k): choose them with ``first_trial``
+        (from 1) and ``trials``.
     set : dict, optional
         Config changes whose keys are not Python names: ``{"auction.rule": "random"}``.
     **overrides
@@ -295,10 +299,10 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         product, the last key varying fastest, as ``[grid]``. A list of such dicts is
         ``[[grid]]``: the union of their products, in order.
     seeds : iterable of int, optional
-        Values of the scenario's seed key, one run per value and configuration (innermost).
-        Required for delivery (``seed``); for replenishment they are first trials
-        (``first_trial``), optional: without them each configuration is one run of trials
-        1 .. ``trials``.
+        Root seeds, one run per value and configuration (innermost), as ``seed`` of
+        :func:`run`. Required for delivery; optional for items and lunar (without them each
+        configuration is one run at the base's seed); refused for replenishment, which has
+        no seed: put ``first_trial`` in the grid to run blocks of trials.
     base : str, path or None
         The config the grid changes, as ``config`` of :func:`run`: None (the paper's
         delivery scenario), a scenario's name or a TOML config file.
@@ -352,6 +356,8 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     else:  # relative to the folder of SWEEP_LABEL, which is the working directory
         head["base"] = os.fspath(path)
     if seeds is not None:
+        if scenario.seed_key is None:
+            raise scenario.seed_refusal(f"seeds={_show(seeds)}")
         head["seeds"] = _seed_list(seeds)
     if set is not None and not isinstance(set, Mapping):
         raise ConfigError(f"set={_show(set)}: expected a dict of config keys to values, e.g. {{'horizon_weeks': 1}}")

@@ -172,6 +172,13 @@ def _name(name: str) -> str:
     return name if name.isprintable() and len(name) <= 60 else _show(name)
 
 
+def seed_refusal(word: str, scenario: str, why: str = "") -> ConfigError:
+    """The refusal of a seed given as ``word`` (``--seed``, ``seed=3``, ``[sweep] seeds``) to a scenario
+    without a root seed (its ``SEED_KEY`` is None): "seed" means the root seed everywhere, never a
+    replicate's index; ``why`` says what chooses its replicates instead."""
+    return ConfigError(f"{word} does not apply to a {scenario} run, which has no root seed{': ' if why else ''}{why}")
+
+
 def _suggest(word: str, candidates: Iterable[str]) -> str:
     """' (did you mean 'x'?)' for the closest candidate, or ''.
 

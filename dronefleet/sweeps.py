@@ -41,12 +41,13 @@ Keys in ``[set]`` and ``[grid]`` are ``section.key`` or bare key names, as with
 ``dronefleet run --set``. :func:`load_sweep` builds (and so validates) the config of
 every run before anything runs; any problem is a :class:`SweepError` naming the key.
 
-Seeds: ``[sweep] seeds`` sets the scenario's seed key, one run per value. A delivery run is
-one replicate, its ``seed``, and a delivery sweep must list its seeds. A replenishment run
-holds all its ``trials`` (trial k uses seed 876 k), so its seed key is ``first_trial`` and
-seeds are optional: without them each configuration is one run of the base's trials
-(1..trials); ``seeds = [1, 51]`` with ``trials = 50`` runs trials 1-100 in two runs per
-configuration. Seeds whose runs would hold a trial twice are refused.
+Seeds: ``[sweep] seeds`` sets the scenario's root seed (its seed key, ``seed``), one run per
+value, as ``--seed`` and ``dronefleet.run(seed=...)`` do. A delivery run is one replicate of its
+``seed``, and a delivery sweep must list its seeds. An items or lunar run holds several
+replicates (trials ``first_trial ..``, runs ``first_run ..``) of its root seed: seeds are
+optional, without them each configuration is one run at the base's seed. A replenishment run
+has no root seed (trial k uses seed 876 k): its seeds are refused, and ``first_trial = [1, 51]``
+in the grid with ``trials = 50`` runs trials 1-100 in two runs per configuration.
 
 ``[grid]`` is one table of lists: the runs are their product. Its keys are taken in one
 canonical order, sorted by name, whatever their order in the file: two files that differ
@@ -69,7 +70,9 @@ The dataset of a sweep, under ``<results>/<name>/``::
 timeseries, summary``; replenishment: ``summary``, one row per trial, and ``timeseries``),
 so every table is its own hive dataset that pandas, pyarrow and DuckDB read as one table.
 The partition keys are the grid's parameter names (bare, sorted by name; with ``[[grid]]``
-the keys of any of its tables), then the seed key (``seed``, ``first_trial``); values are
+the keys of any of its tables), then the root seed if the scenario has one: ``seed``, or
+``root_seed`` where a run holds several replicates whose tables carry each one's own stream
+seed as ``seed`` (items, lunar; :func:`partition_name`); values are
 ``str(value)`` of the config's value (``15.0``, ``3``, ``random``), percent-encoded as hive
 readers expect, so one layout holds every run of a ``[[grid]]`` union (a key that a table
 does not name has the run's value from the base or ``[set]``). A file holds no column named
@@ -152,17 +155,35 @@ _SCHEDULER = re.compile(rf"(?:(?:tcp|tls|ucx|ws|wss)://)?(?P<host>{_LABEL}(?:\.{
                         r":(?P<port>[0-9]{1,5})")
 
 
+#: The partition name of the root seed of a scenario whose run holds several replicates: its tables
+#: carry each replicate's own stream seed as a column ``seed`` (items, lunar), which a partition
+#: named ``seed`` would replace with the root seed (hive readers refuse a column that is both).
+ROOT_SEED = "root_seed"
+
+
+def partition_name(scenario: Scenario, key: str) -> str:
+    """The name of config key ``key`` in a sweep's partition paths: the key itself, but
+    :data:`ROOT_SEED` for the root seed of a scenario whose runs hold several replicates."""
+    several = hasattr(scenario.module, "replicates")
+    return ROOT_SEED if several and key == scenario.seed_key else key
+
+
+def config_key(scenario: Scenario, name: str) -> str:
+    """The config key of partition name ``name`` (:func:`partition_name`'s inverse)."""
+    return scenario.seed_key if name == ROOT_SEED and scenario.seed_key is not None else name
+
+
 @dataclass(frozen=True)
 class Run:
     """One run of a sweep: its resolved config, the partition keys that place it, its scenario."""
 
     config: Any
-    keys: tuple[str, ...]   # the grid's parameter names (sorted), then the scenario's seed key
+    keys: tuple[str, ...]   # the grid's parameter names (sorted), then the seed's partition name (if any)
     scenario: Scenario
 
     def value(self, key: str) -> Any:
-        """The run's value of config key ``key``."""
-        return self.scenario.value(self.config, key)
+        """The run's value of partition key or config key ``key``."""
+        return self.scenario.value(self.config, config_key(self.scenario, key))
 
     @property
     def partition(self) -> str:
@@ -209,18 +230,21 @@ class Sweep:
 
     def describe(self) -> str:
         """``3 rule x 6 tau_minutes x 20 seeds = 360 runs``; with ``[[grid]]``, the products summed:
-        ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown)."""
-        return f"{_factors(self.products, len(self.seeds))} = {len(self.runs)} runs"
+        ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown); a
+        scenario without a root seed has no seeds factor."""
+        n_seeds = len(self.seeds) if self.scenario.seed_key is not None else None
+        return f"{_factors(self.products, n_seeds)} = {len(self.runs)} runs"
 
 
-def _factors(products, n_seeds: int) -> str:
-    """``3 rule x 6 tau_minutes x 20 seeds``, or ``(1 point + 7 n_chargers x 5 charger_capacity_factor) x 1 seed``."""
-    seeds = f"{n_seeds} seed{'s' if n_seeds != 1 else ''}"
+def _factors(products, n_seeds: int | None) -> str:
+    """``3 rule x 6 tau_minutes x 20 seeds``, or ``(1 point + 7 n_chargers x 5 charger_capacity_factor) x 1 seed``;
+    no seeds factor for ``n_seeds`` None (a scenario without a root seed)."""
+    seeds = [] if n_seeds is None else [f"{n_seeds} seed{'s' if n_seeds != 1 else ''}"]
     if len(products) == 1:
-        return " x ".join([*(f"{len(values)} {key}" for key, values in products[0].items()), seeds])
+        return " x ".join([*(f"{len(values)} {key}" for key, values in products[0].items()), *seeds]) or "1 point"
     terms = [" x ".join(f"{len(values)} {key}" for key, values in product.items() if len(values) > 1) or "1 point"
              for product in products]
-    return f"({' + '.join(terms)}) x {seeds}"
+    return " x ".join([f"({' + '.join(terms)})", *seeds])
 
 
 # --------------------------------------------------------------------------- reading a sweep file
@@ -377,18 +401,6 @@ def _scenario(head: dict, base: Path | None, path: Path) -> Scenario:
     return of_base
 
 
-def _check_replicates(scenario: Scenario, runs: list[Run], where: str) -> None:
-    """Refuse seeds whose runs (of one configuration) would hold a replicate twice."""
-    held = sorted(((scenario.replicates(run.config), run) for run in runs), key=lambda pair: pair[0].start)
-    for (first, a), (second, b) in zip(held, held[1:]):
-        if second.start < first.stop:
-            key, last = scenario.seed_key, min(first.stop, second.stop) - 1
-            shared = str(last) if last == second.start else f"{second.start}-{last}"
-            raise SweepError(f"{where}: {key} = {a.value(key)} and {key} = {b.value(key)} give runs that both hold "
-                             f"replicates {shared} (each run holds {len(first)}): space the seeds at least that "
-                             "far apart", [key])
-
-
 def load_sweep(path: str | os.PathLike, changes: Mapping[str, Any] | None = None,
                seeds: Sequence[int] | None = None) -> Sweep:
     """Read and validate a sweep file: every run's config is built here, before any run.
@@ -451,12 +463,14 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
         if both:
             raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in {label}", both)
     listed = head.get("seeds") if seeds is None else list(seeds)
+    if key is None and listed is not None:  # "seed" means the root seed everywhere, never a replicate's index
+        raise SweepError(str(scenario.seed_refusal(f"{path}: [sweep] seeds")), ["seeds"])
     # without seeds (where the scenario allows it), one run per configuration at the base's seed value
     seeds = None if listed is None and not scenario.seeds_required else _seeds(listed, f"{path}: [sweep] seeds")
     per_point = 1 if seeds is None else len(seeds)
     n_runs = sum(math.prod(len(values) for values in product.values()) for _, product in products) * per_point
     if n_runs > MAX_RUNS:
-        factors = _factors([product for _, product in products], per_point)
+        factors = _factors([product for _, product in products], None if key is None else per_point)
         raise SweepError(f"{path}: {factors} = {n_runs:,} runs; a sweep may hold at most {MAX_RUNS:,} runs: "
                          "split it into several sweeps (another [sweep] name each)")
 
@@ -469,13 +483,14 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     except ConfigError as error:
         raise SweepError(f"{path}: [set]: {error}", error.keys) from None
     if seeds is None:
-        seeds = (scenario.value(config, key),)
+        seeds = () if key is None else (scenario.value(config, key),)
     for seed in seeds:
         try:
             scenario.replace(config, {key: seed})
         except ConfigError as error:
             raise SweepError(f"{path}: [sweep] seeds: {error}", error.keys) from None
-    keys = (*sorted({k for _, product in products for k in product}), key)
+    grid_keys = tuple(sorted({k for _, product in products for k in product}))
+    keys = grid_keys if key is None else (*grid_keys, partition_name(scenario, key))
     runs, given = [], {}   # given: each configuration -> the grid point that gave it first
     for label, product in products:
         for point in itertools.product(*product.values()):
@@ -489,11 +504,9 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
                 raise SweepError(f"{path}: {where} is the configuration of {given[at_point]}: "
                                  "a sweep runs each configuration once", list(changes))
             given[at_point] = where
-            point_runs = [Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds]
-            if len(point_runs) > 1 and scenario.replicates(at_point) is not None:
-                _check_replicates(scenario, point_runs, f"{path}: [sweep] seeds at {where}")
-            runs.extend(point_runs)
-    values = {k: tuple(dict.fromkeys(run.value(k) for run in runs)) for k in keys[:-1]}
+            runs.extend([Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds] if seeds
+                        else [Run(at_point, keys, scenario)])
+    values = {k: tuple(dict.fromkeys(run.value(k) for run in runs)) for k in grid_keys}
     return Sweep(path.absolute(), name, scenario, tuple({k: tuple(v) for k, v in product.items()}
                                                        for _, product in products),
                  values, seeds, runs_per_task, tuple(runs), text)
@@ -1208,7 +1221,8 @@ def _partition_schema(sweep: Sweep):
 
     # bool: a switch such as lunar's los_bodies is a grid key like any other (partition "los_bodies=True")
     types = {float: pa.float64(), int: pa.int64(), str: pa.string(), bool: pa.bool_()}
-    return pa.schema([(key, types[type(sweep.scenario.defaults[key])]) for key in sweep.runs[0].keys])
+    scenario = sweep.scenario
+    return pa.schema([(key, types[type(scenario.defaults[config_key(scenario, key)])]) for key in sweep.runs[0].keys])
 
 
 def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:

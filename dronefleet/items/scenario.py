@@ -17,9 +17,10 @@ default (from :data:`dronefleet.items.params.KEYS`). Types are strict as for the
 value and rule is checked in :meth:`dronefleet.items.params.Params.validate`. ``--set key=value``
 takes ``section.key`` or the bare key; ``--seed`` sets ``run.seed``.
 
-A run holds all its trials; in a sweep its seed key is ``first_trial`` (blocks of ``trials``
-trials, as replenishment). Trial k of root seed s draws every stream from s * 2**32 + k, so the
-same trial index pairs runs across algorithms and (n, c, s) cells (section 10).
+A run holds its trials ``first_trial .. first_trial + trials - 1``; ``seed`` is the root seed,
+what ``--seed``, ``dronefleet.run(seed=...)`` and a sweep's ``seeds`` set. Trial k of root seed s
+draws every stream from s * 2**32 + k, so the same trial index pairs runs across algorithms and
+(n, c, s) cells.
 
 Tables (:func:`simulate`): ``summary``, one row per trial (the columns of
 :func:`dronefleet.items.simulate.summary_columns`); ``robots``, one row per trial and robot
@@ -54,7 +55,7 @@ NAME = "items"
 TABLES = ("summary", "robots")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.items.study`).
 FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
-SEED_KEY = "first_trial"
+SEED_KEY = "seed"
 SEEDS_REQUIRED = False
 
 SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, allowed(name), key.doc) for name, key in KEYS.items()}

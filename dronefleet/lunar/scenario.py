@@ -22,9 +22,9 @@ config is built (:func:`load`, :func:`replace`, :func:`config_from_dict`): the k
 re-checks. ``--set key=value`` takes ``section.key`` or the bare key; ``--seed`` sets
 ``run.seed``.
 
-A run holds all its runs ``first_run .. first_run + runs - 1`` (one kernel call); in a sweep its
-seed key is ``first_run`` (blocks of ``runs`` runs). Run j of every layout and capacity draws the
-same per-robot streams (spec section 13: common random numbers).
+A run holds all its runs ``first_run .. first_run + runs - 1`` (one kernel call); ``seed`` is the
+root seed, what ``--seed``, ``dronefleet.run(seed=...)`` and a sweep's ``seeds`` set. Run j of every
+layout and capacity draws the same per-robot streams (common random numbers).
 
 Tables (:func:`simulate`, columns in :func:`table_schemas`): ``summary`` (one row per run),
 ``timeseries`` (one row per run and update interval), ``trips`` (one row per trip record),
@@ -64,7 +64,7 @@ TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "deaths", "re
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.lunar.study`).
 FIGURES: tuple[str, ...] = (*(f"lunar-fig{k:02d}" for k in (3, 4, 5, 6, 7, 8, 9, 11)), "lunar-control", "lunar-e4",
                             "lunar-e5")
-SEED_KEY = "first_run"
+SEED_KEY = "seed"
 SEEDS_REQUIRED = False
 
 SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, _allowed(key), key.doc) for name, key in KEYS.items()}

@@ -17,13 +17,13 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from ..config import SCENARIO_KEY, ConfigError, Sections, _show, _suggest, with_sources
+from ..config import SCENARIO_KEY, ConfigError, Sections, _show, _suggest, seed_refusal, with_sources
 from ..console import counted
 from ..contract import Field
 from .params import BASE_CAPACITY, UPPER_LIMITS, Params
 from .simulate import TRIAL_SEED_FACTOR
 
-__all__ = ["NAME", "SCHEMA", "SECTIONS", "DEFAULTS", "MAX_FIRST_TRIAL", "Config", "load", "resolve_key", "replace",
+__all__ = ["NAME", "SCHEMA", "SECTIONS", "DEFAULTS", "MAX_FIRST_TRIAL", "NO_SEED", "Config", "load", "resolve_key", "replace",
            "value", "replicates", "config_from_dict", "read_config", "describe", "label"]
 
 NAME = "replenishment"
@@ -137,6 +137,12 @@ def _build(values, origin):
 resolve_key = _SECTIONS.resolve_key
 
 
+#: Why a replenishment run takes no seed, and what chooses its trials (the end of :func:`no_seed`'s message).
+NO_SEED = (f"trial k draws from its own seed {TRIAL_SEED_FACTOR} k, so the trials are the streams; choose them with "
+           "first_trial (from 1) and trials")
+
+
+
 def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), seed: int | None = None) -> Config:
     """Read a replenishment config: defaults < file < ``overrides`` (``"key=value"``, in order).
 
@@ -149,8 +155,7 @@ def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), s
         their own seeds: choose them with ``first_trial`` and ``trials``).
     """
     if seed is not None:
-        raise ConfigError(f"--seed does not apply to {NAME}: trial k uses seed {TRIAL_SEED_FACTOR} k; "
-                          "choose the trials with --set first_trial=K --set trials=N")
+        raise seed_refusal("--seed", NAME, NO_SEED)
     values, origin = _SECTIONS.read(DEFAULTS, path, overrides)
     return _build(values, origin)
 

@@ -19,11 +19,11 @@ parameters are checked in one place, :meth:`Params.validate`; this module adds
 only ``first_trial`` (trial k uses seed 876 k, so any slice of trials can run
 alone). ``--set key=value`` takes ``section.key`` or the bare key.
 
-A run holds all its trials, so in a sweep (:mod:`dronefleet.sweeps`) a configuration is one
-run: its seed key is ``first_trial``, and ``[sweep] seeds`` are optional first trials of
-blocks of ``trials`` trials (``seeds = [1, 51]`` with ``trials = 50``: trials 1-100 in two
-runs per configuration, which can be added later without redoing the first 50; blocks that
-would share a trial are refused).
+A run holds all its trials and has no root seed (``SEED_KEY`` is None): ``--seed``,
+``dronefleet.run(seed=...)`` and a sweep's ``seeds`` are refused, naming ``first_trial`` and
+``trials``, which choose the trials. In a sweep (:mod:`dronefleet.sweeps`) a configuration is
+one run; ``first_trial = [1, 51]`` in the grid with ``trials = 50`` runs trials 1-100 in two runs
+per configuration, which can be added later without redoing the first 50.
 
 Tables (:func:`simulate`): ``summary``, one row per trial (the columns of
 :func:`dronefleet.replenishment.simulate.summary_columns`); ``timeseries``, one row
@@ -47,7 +47,7 @@ import numpy as np
 from ..console import counted
 from .bounds import (COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds,
                      fixed_work_ceiling)
-from .config import (DEFAULTS, NAME, SCHEMA, Config, config_from_dict, describe, label, load,
+from .config import (DEFAULTS, NAME, NO_SEED, SCHEMA, Config, config_from_dict, describe, label, load,
                      read_config, replace, replicates, resolve_key, value)
 from .kernel import PHASES
 from .simulate import summary_columns
@@ -55,7 +55,7 @@ from .simulate import summary_columns
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "Config", "load",
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "NO_SEED", "Config", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
            "simulate", "format_summary", "describe", "label", "format_bounds", "replay_data", "study"]
 
@@ -63,8 +63,8 @@ TABLES = ("summary", "timeseries")
 #: Figures of ``dronefleet reproduce`` drawn from this scenario (fig09..fig12 come with
 #: dronefleet/replenishment/experiments.py).
 FIGURES: tuple[str, ...] = ("fig09", "fig10", "fig11", "fig12")
-#: A sweep's seeds are first trials; without them a configuration is one run of the base's trials.
-SEED_KEY = "first_trial"
+#: No root seed: --seed, seed= and a sweep's seeds are refused (:data:`NO_SEED` says why).
+SEED_KEY = None
 SEEDS_REQUIRED = False
 
 

@@ -187,11 +187,9 @@ n_chargers = [1, 2]
      "n_chargers = 2"),
     (REPLENISHMENT.replace("ticks = 200", "ticks = 2.5"), "[set]: run.ticks must be an integer, got float 2.5"),
     (REPLENISHMENT.replace("trials = 2", "trials = 0"), "[set]: trials = 0 is not allowed: must be >= 1"),
-    (REPLENISHMENT.replace("trials = 2", "first_trial = 3"),
-     "[set]: first_trial cannot be set here: it is the seed key, given by [sweep] seeds"),
-    (REPLENISHMENT.replace("[set]", "seeds = [0]\n[set]"), "[sweep] seeds: run.first_trial = 0 is out of range"),
-    (REPLENISHMENT.replace("[set]", "seeds = [1, 2]\n[set]"), "first_trial = 1 and first_trial = 2 give runs that "
-                                                               "both hold replicates 2 (each run holds 2)"),
+    (REPLENISHMENT.replace("[set]", "seeds = [0]\n[set]"),
+     "[sweep] seeds does not apply to a replenishment run, which has no root seed"),
+    (REPLENISHMENT.replace("trials = 2", "first_trial = 0"), "[set]: run.first_trial = 0 is out of range"),
     (REPLENISHMENT.replace('"replenishment"', '"replenish"'),
      "[sweep] unknown scenario 'replenish' (did you mean 'replenishment'?); registered scenarios: delivery, "
      "replenishment"),

@@ -55,13 +55,15 @@ def test_scenario_contract(name, tmp_path, capsys):
     assert isinstance(scenario.figures, tuple) and "summary" in scenario.tables
     # what sweeps need: key resolution, validated replacement, values, the seed key
     defaults = scenario.load(None)
-    assert scenario.seed_key in scenario.schema and isinstance(scenario.seeds_required, bool)
+    # the root seed (None: replenishment, whose trials are its streams) and whether a sweep must list seeds
+    assert (scenario.seed_key is None or scenario.seed_key in scenario.schema) and isinstance(scenario.seeds_required,
+                                                                                              bool)
     for key, field in scenario.schema.items():
         assert scenario.resolve_key(key) == scenario.resolve_key(f"{field.section}.{key}") == key
         assert scenario.value(defaults, key) == scenario.defaults[key]
     assert scenario.replace(defaults, {}) == defaults
     with pytest.raises(ConfigError):
-        scenario.replace(defaults, {scenario.seed_key: -1})
+        scenario.replace(defaults, {scenario.seed_key or "first_trial": -1})
     # loading: the file names its scenario; defaults with no file or an empty one
     path = _config_file(tmp_path, text)
     assert scenarios.scenario_of(path) is scenario
@@ -289,7 +291,7 @@ def test_bounds_refuse_where_none_exists(capsys, args, why):
     (None, ["--set", "trials=1000", "--set", "ticks=100000", "--set", "sample_every=100"],
      "robot-ticks (trials 1000 x (ticks 100000 x 12 robots + 1,000 per trial's set-up)); at most 1e+09"),
     (None, ["--set", "first_trial=0"], "run.first_trial = 0 is out of range"),
-    (None, ["--seed", "3"], "--seed does not apply to replenishment"),
+    (None, ["--seed", "3"], "--seed does not apply to a replenishment run, which has no root seed"),
     (None, ["--fleet", "f.parquet"], "--fleet applies to delivery runs only"),
     ('scenario = "replenishmnt"\n', [], "unknown scenario 'replenishmnt' (did you mean 'replenishment'?); "
                                         "registered scenarios: delivery, replenishment"),

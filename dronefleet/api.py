@@ -28,13 +28,14 @@ import dataclasses
 import itertools
 import json
 import os
+import re
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import scenarios
-from .config import ConfigError, _show, check_depth
+from .config import ConfigError, _show, _suggest, check_depth, given_twice, named_file, shipped_files
 from .scenarios import Scenario
 from .sweeps import (MAX_RUNS, Progress, Sweep, _probe, available_cpus, check_collected, check_layout, collect,
                      run_sweep, simulate, sweep_of_document)
@@ -59,6 +60,14 @@ def _source(config: Any, argument: str) -> tuple[Scenario, str | os.PathLike | N
     if not isinstance(config, (str, os.PathLike)):
         raise ConfigError(f"{argument}={_show(config)}: expected None, a scenario name "
                           f"({', '.join(map(repr, registered))}) or the path of a TOML config file")
+    if isinstance(config, str) and re.fullmatch(r"[\w-]+", config) and not os.path.lexists(config):
+        # a bare word is a name, as on the command line: a shipped config's, or a typo of one
+        shipped = shipped_files("config")
+        if config not in shipped:
+            raise ConfigError(f"{argument}={config!r} is neither a scenario, a shipped config nor a file"
+                              f"{_suggest(config, [*registered, *shipped])}: scenarios {', '.join(registered)}; "
+                              f"shipped configs {', '.join(shipped)}")
+        config = named_file(config)
     return scenarios.scenario_of(config), config
 
 
@@ -68,21 +77,24 @@ def _changes(scenario: Scenario, fixed: Mapping[str, Any] | None, overrides: Map
     if fixed is not None and not isinstance(fixed, Mapping):
         raise ConfigError(f"set={_show(fixed)}: expected a dict of config keys to values, "
                           "e.g. set={'auction.rule': 'random'}")
-    given = [*(fixed or {}).items(), *overrides.items()]
+    # each change with the way the caller wrote it, for a refusal of a key given twice
+    given = [*((key, value, f"set[{_show(key)}]") for key, value in (fixed or {}).items()),
+             *((key, value, f"{key}={_show(value)}") for key, value in overrides.items())]
     if seed is not None:
         if scenario.seed_key is None:
             raise scenario.seed_refusal(f"seed={_show(seed)}")
-        given.append((scenario.seed_key, seed))
+        given.append((scenario.seed_key, seed, f"seed={_show(seed)}"))
     changes: dict[str, Any] = {}
-    for key, value in given:
+    how: dict[str, str] = {}
+    for key, value, written in given:
         if not isinstance(key, str):
             raise ConfigError(f"config key {_show(key)} is not a string: keys are names such as 'tau_minutes' "
                               "or 'orders.tau_minutes'")
         name = scenario.resolve_key(key)  # ConfigError listing the allowed keys
         check_depth(value, "", key)
         if name in changes:
-            raise ConfigError(f"{name} is given twice (as {_show(key)} and before, in set, a keyword or seed)", [name])
-        changes[name] = value
+            raise given_twice(name, how[name], written)
+        changes[name], how[name] = value, written
     return changes
 
 

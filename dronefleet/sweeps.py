@@ -1098,7 +1098,13 @@ _SLURM_FORMATS = {"time": (_SLURM_TIME, "a SLURM time limit: minutes, MM:SS, HH:
                                         "D-HH:MM:SS (e.g. 00:30:00), or UNLIMITED"),
                   "partition": (re.compile(rf"{_SLURM_NAME}(?:,{_SLURM_NAME})*"),
                                 "partition names (letters, digits, '_', '.', '-'; at most 128 each), comma-separated"),
-                  "account": (re.compile(_SLURM_NAME), "an account name (letters, digits, '_', '.', '-'; at most 128)")}
+                  "account": (re.compile(_SLURM_NAME), "an account name (letters, digits, '_', '.', '-'; at most 128)"),
+                  "mem": (re.compile(r"[1-9][0-9]{0,8}[KMGT]?"), "a SLURM memory size: a whole number with a unit "
+                                                                 "K, M (the default), G or T, e.g. 4G")}
+#: ``#SBATCH --mem`` of a task when ``sweep plan --mem`` is not given: a task runs its runs one after
+#: another, each bounded in size by its scenario's run limits (a few hundred MB at most), in a
+#: Python with numpy, pyarrow and numba loaded (~0.5 GB).
+DEFAULT_MEM = "2G"
 
 
 def _script_value(value: str | os.PathLike, what: str, sbatch: bool = False) -> str:
@@ -1117,7 +1123,7 @@ def _script_value(value: str | os.PathLike, what: str, sbatch: bool = False) -> 
 
 
 def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, partition: str | None = None,
-               account: str | None = None) -> str:
+               account: str | None = None, mem: str = DEFAULT_MEM) -> str:
     """A SLURM job-array script running every task of ``sweep`` into ``results``/<name>.
 
     Paths are absolute and the python is this one (``sys.executable``), so the script works
@@ -1126,10 +1132,11 @@ def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, parti
 
     Every value is quoted (``shlex.quote``: bash and sbatch take it as one literal word), and
     refused (SweepError) before anything is written if it holds a control character or a byte
-    that is not UTF-8; ``time_limit``, ``partition`` and ``account`` must have SLURM's formats
-    (see :data:`_SLURM_FORMATS`).
+    that is not UTF-8; ``time_limit``, ``partition``, ``account`` and ``mem`` (per task) must have
+    SLURM's formats (see :data:`_SLURM_FORMATS`). Without ``time_limit`` the script says that the
+    partition's default time limit applies, in a comment beside the ``#SBATCH`` lines.
     """
-    for flag, value in (("time", time_limit), ("partition", partition), ("account", account)):
+    for flag, value in (("time", time_limit), ("partition", partition), ("account", account), ("mem", mem)):
         pattern, allowed = _SLURM_FORMATS[flag]
         if value is not None and not pattern.fullmatch(value):
             raise SweepError(f"--{flag} {_shown(value)} is not {allowed}")
@@ -1141,15 +1148,18 @@ def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, parti
     # in --output, % starts SLURM's file name patterns (%A job, %a task): the folder's own is %%
     logs = str(out / "_logs").replace("%", "%%") + "/%A_%a.out"
     options = [f"--job-name=dronefleet-{sweep.name}", f"--array=0-{sweep.n_tasks - 1}", "--cpus-per-task=1",
-               f"--output={shlex.quote(logs)}"]
+               f"--mem={mem}", f"--output={shlex.quote(logs)}"]
     options += [f"--{flag}={shlex.quote(value)}" for flag, value in
                 (("time", time_limit), ("partition", partition), ("account", account)) if value]
+    untimed = [] if time_limit else ["# No --time: the partition's default time limit applies to each task; "
+                                     "set one with dronefleet sweep plan --time HH:MM:SS."]
     cache = shlex.quote(str(results / "_numba_cache"))
     return "\n".join([
         f"{SCRIPT_HEAD}{sweep.name} ({shlex.quote(str(sweep.path))}):",
         f"# {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs.",
         "# Written by `dronefleet sweep plan`; submit it with `sbatch` (on its own, or with --array=<tasks>",
         "# to rerun some): a task skips its runs that are done and redoes the others.",
+        *untimed,
         *(f"#SBATCH {option}" for option in options),
         "set -euo pipefail",
         f"cd {shlex.quote(here)}",
@@ -1343,7 +1353,7 @@ def plan_command(args: argparse.Namespace) -> int:
     sweep, out = _open(args)
     own = out / f"{sweep.name}.sbatch"
     script = Path(_script_value(args.out, "--out")) if args.out else own
-    text = job_script(sweep, Path(args.results), args.time, args.partition, args.account)
+    text = job_script(sweep, Path(args.results), args.time, args.partition, args.account, args.mem)
     if Path(os.path.abspath(script)).is_relative_to(os.path.abspath(out)) and \
             os.path.abspath(script) != os.path.abspath(own):
         raise SweepError(f"--out {str(script)!r} lies inside the dataset {str(out)!r}, whose files it would "
@@ -1355,7 +1365,8 @@ def plan_command(args: argparse.Namespace) -> int:
     with writing(script):
         write_atomic(script, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     print(f"sweep {sweep.name}: {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs")
-    print(f"  job-array script  {script}")
+    print(f"  job-array script  {script} (per task: 1 CPU, {args.mem} memory, "
+          f"{f'time limit {args.time}' if args.time else 'the partition default time limit'})")
     print(f"  submit it with    sbatch {shlex.quote(str(script))}")
     return 0
 

@@ -336,7 +336,7 @@ def test_value_errors_name_their_source(tmp_path):
         load_config(path, overrides=["soh_max=0.8"])
     with pytest.raises(ConfigError, match=r"\(set in --set n_uavs=0\)"):
         load_config(overrides=["n_uavs=0"])
-    with pytest.raises(ConfigError, match=r"run.seed must be an integer.*seed argument"):
+    with pytest.raises(ConfigError, match=r"run.seed must be an integer.*--seed 1.5"):
         load_config(seed=1.5)
 
 

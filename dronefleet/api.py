@@ -397,7 +397,7 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
 def _run_and_collect(planned: Sweep, out: Path, workers: int) -> pandas.DataFrame:
     """Run the sweep ``planned`` into the dataset ``out`` on ``workers`` processes; its collected table."""
     # a bar in a notebook; elsewhere as the caller's logging shows dronefleet's INFO lines
-    _, failures = run_sweep(planned, out, planned.runs, workers, progress=Progress())
+    _, failures = run_sweep(planned, out, planned.runs, workers, progress=Progress(planned.scenario.replicate_noun))
     if failures:
         shown = "; ".join(f"{run.partition}: {error}" for run, error in list(failures.items())[:3])
         raise RuntimeError(f"{len(failures)} of {len(planned.runs)} runs failed: {shown}")

@@ -50,15 +50,16 @@ def export(source: str | os.PathLike, out: str | os.PathLike | None = None, over
     empty or (with ``overwrite``) a folder of CSV files only, checked before anything is read."""
     source = Path(source)
     if not os.path.lexists(source):
-        raise ConfigError(f"{_show(str(source))} does not exist: give a parquet file, a run folder or a sweep's dataset")
+        raise ConfigError(f"{_show(str(source))} does not exist: give a parquet file, a run folder or a sweep's "
+                          "dataset")
     out = Path(out) if out is not None else source.with_name(f"{source.stem if source.is_file() else source.name}-csv")
     if out.exists():
         if not out.is_dir():
             raise ConfigError(f"--out {_show(str(out))} is a file; give a folder for the CSV files")
         held = [path.name for path in out.iterdir()]
         if held and not (overwrite and all(name.endswith(".csv") for name in held)):
-            raise ConfigError(f"--out {_show(str(out))} is not empty; give an empty or new folder"
-                              f"{'' if overwrite else ', or --overwrite to replace the CSV files of an earlier export'}")
+            hint = "" if overwrite else ", or --overwrite to replace the CSV files of an earlier export"
+            raise ConfigError(f"--out {_show(str(out))} is not empty; give an empty or new folder{hint}")
     tables = tables_of(source)
     probe_folders([out])
     with writing(out):

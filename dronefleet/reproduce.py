@@ -156,7 +156,7 @@ class Study:
         sweep = self.sweep(name)
         out = self.out(name)
         start = time.perf_counter()
-        ran, failures = run_sweep(sweep, out, sweep.runs, self.jobs, progress=Progress())
+        ran, failures = run_sweep(sweep, out, sweep.runs, self.jobs, progress=Progress(sweep.scenario.replicate_noun))
         self.log(f"  sweep {sweep.name}: {sweep.describe()}; ran {ran} in {time.perf_counter() - start:.1f} s, "
                  f"{len(sweep.runs) - ran} reused")
         if failures:

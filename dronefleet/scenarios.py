@@ -96,6 +96,12 @@ class Scenario:
         """The root seed's key (what ``--seed``, ``seed=`` and a sweep's ``seeds`` set), or None."""
         return self.module.SEED_KEY
 
+    @property
+    def replicate_noun(self) -> str:
+        """What one of a run's replicates is called ("trial", "run"; a scenario's ``REPLICATE_NOUN``), as
+        progress counts them; "run" for a scenario whose run is one replicate."""
+        return getattr(self.module, "REPLICATE_NOUN", "replicate" if hasattr(self.module, "replicates") else "run")
+
     def seed_refusal(self, word: str) -> ConfigError:
         """The one-line refusal of a seed given as ``word`` to a scenario without one (:attr:`seed_key` None)."""
         return seed_refusal(word, self.name, getattr(self.module, "NO_SEED", ""))

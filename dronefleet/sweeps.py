@@ -1003,16 +1003,19 @@ def available_cpus() -> int:
 
 
 class Progress:
-    """``run_sweep``'s ``progress``: finished runs as a tqdm bar with the failures counted,
-    drawn as :func:`dronefleet.console.progress` says (on a terminal, without ``-q``)."""
+    """``run_sweep``'s ``progress``: what its finished runs hold (lunar runs, items or replenishment
+    trials: a sweep of 3 configurations of 50 lunar runs counts to 150, not to 3) as a tqdm bar with
+    the failed runs counted, drawn as :func:`dronefleet.console.progress` says (on a terminal,
+    without ``-q``). ``noun`` names what is counted (:attr:`Scenario.replicate_noun`)."""
 
-    def __init__(self) -> None:
+    def __init__(self, noun: str = "run") -> None:
+        self.noun = noun
         self.bar = None  # made at the first call, which tells the number of runs
 
-    def __call__(self, finished: int, total: int, failed: int) -> None:
+    def __call__(self, finished: float, total: float, failed: int) -> None:
         if self.bar is None:
-            self.bar = console.progress(total, "run", "  runs")
-        self.bar.set_postfix_str(f"{failed} failed", refresh=False)
+            self.bar = console.progress(total, self.noun, f"  {self.noun}s")
+        self.bar.set_postfix_str(f"{console.counted(failed, 'sweep run')} failed", refresh=False)
         self.bar.update(finished - self.bar.n)
         if finished == total:
             self.bar.close()
@@ -1029,7 +1032,8 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
 
     Locally on ``jobs`` processes, or, with ``scheduler`` (a Dask scheduler address), one
     Dask task per run (the workers write the files: ``out`` must be on a filesystem they
-    share). ``progress(finished, to_run, failed)`` is called after every run. Returns the
+    share). ``progress(finished, to_run, failed)`` is called after every run, the first two counted
+in what the runs hold (:meth:`Scenario.replicates`; a run of none counts 1). Returns the
     number of runs executed and the failed ones with their errors.
 
     A run whose worker process dies (killed, out of memory, segfault) or that the executor
@@ -1059,7 +1063,10 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
         out.mkdir(parents=True, exist_ok=True)
         _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
     failures = {}
-    for finished, (run, error, crash) in enumerate(results, start=1):
+    # what each run holds (its trials or lunar runs; 1 for a delivery run): the progress counts those
+    held = {run: len(run.scenario.replicates(run.config) or range(1)) for run in todo}
+    total, finished = sum(held.values()), 0
+    for run, error, crash in results:
         if crash is not None:
             # one line: loky's message names the worker's exit code on a line of its own
             error = _record_failure(run, out, f"its worker died (killed, out of memory or crashed) while running it: "
@@ -1068,8 +1075,9 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
         if error is not None:
             failures[run] = error
         log.debug(f"  run {run.partition}: {'done' if error is None else f'failed: {error}'}")
+        finished += held[run]
         if progress is not None:
-            progress(finished, len(todo), len(failures))
+            progress(finished, total, len(failures))
     return len(todo), failures
 
 
@@ -1393,7 +1401,7 @@ def run_command(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     try:
         with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # with --jobs 1 its runs run here
-            ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
+            ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress(sweep.scenario.replicate_noun))
     except KeyboardInterrupt:
         log.warning(f"sweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
         return 130  # the shell's code for a command stopped by Ctrl-C

@@ -47,7 +47,7 @@ from .simulate import robot_columns, summary_columns
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load",
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "REPLICATE_NOUN", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
            "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable", "study"]
 
@@ -57,6 +57,7 @@ TABLES = ("summary", "robots")
 FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
 SEED_KEY = "seed"
 SEEDS_REQUIRED = False
+REPLICATE_NOUN = "trial"
 
 SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, allowed(name), key.doc) for name, key in KEYS.items()}
 DEFAULTS: dict = {name: key.default for name, key in KEYS.items()}

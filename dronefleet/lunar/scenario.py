@@ -54,10 +54,10 @@ from .params import LunarParams
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "RUN_LIMITS",
-           "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config",
-           "run_size", "table_schemas", "simulate", "format_summary", "describe", "label", "replay_data",
-           "check_replayable", "study"]
+__all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "REPLICATE_NOUN",
+           "RUN_LIMITS", "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict",
+           "read_config", "run_size", "table_schemas", "simulate", "format_summary", "describe", "label",
+           "replay_data", "check_replayable", "study"]
 
 NAME = "lunar"
 TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "deaths", "recharge_triggers", "beacon_costs")
@@ -66,6 +66,7 @@ FIGURES: tuple[str, ...] = (*(f"lunar-fig{k:02d}" for k in (3, 4, 5, 6, 7, 8, 9,
                             "lunar-e5")
 SEED_KEY = "seed"
 SEEDS_REQUIRED = False
+REPLICATE_NOUN = "run"
 
 SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, _allowed(key), key.doc) for name, key in KEYS.items()}
 DEFAULTS: dict = {f.name: f.default for f in fields(LunarParams)}

@@ -23,8 +23,8 @@ from ..contract import Field
 from .params import BASE_CAPACITY, UPPER_LIMITS, Params
 from .simulate import TRIAL_SEED_FACTOR
 
-__all__ = ["NAME", "SCHEMA", "SECTIONS", "DEFAULTS", "MAX_FIRST_TRIAL", "NO_SEED", "Config", "load", "resolve_key", "replace",
-           "value", "replicates", "config_from_dict", "read_config", "describe", "label"]
+__all__ = ["NAME", "SCHEMA", "SECTIONS", "DEFAULTS", "MAX_FIRST_TRIAL", "NO_SEED", "Config", "load", "resolve_key",
+           "replace", "value", "replicates", "config_from_dict", "read_config", "describe", "label"]
 
 NAME = "replenishment"
 

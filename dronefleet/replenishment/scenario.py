@@ -55,9 +55,10 @@ from .simulate import summary_columns
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "NO_SEED", "Config", "load",
-           "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
-           "simulate", "format_summary", "describe", "label", "format_bounds", "replay_data", "study"]
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "REPLICATE_NOUN",
+           "NO_SEED", "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict",
+           "read_config", "table_schemas", "simulate", "format_summary", "describe", "label", "format_bounds",
+           "replay_data", "study"]
 
 TABLES = ("summary", "timeseries")
 #: Figures of ``dronefleet reproduce`` drawn from this scenario (fig09..fig12 come with
@@ -66,6 +67,7 @@ FIGURES: tuple[str, ...] = ("fig09", "fig10", "fig11", "fig12")
 #: No root seed: --seed, seed= and a sweep's seeds are refused (:data:`NO_SEED` says why).
 SEED_KEY = None
 SEEDS_REQUIRED = False
+REPLICATE_NOUN = "trial"
 
 
 # ---------------------------------------------------------------- running

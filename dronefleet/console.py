@@ -111,8 +111,8 @@ class _LateBar:
             from tqdm import tqdm  # not for --help and --version: a command that draws no bar does not load it
 
             self.bar = tqdm(total=self.total, unit=self.unit, desc=self.desc, file=sys.stderr, disable=not self.shown,
-                            leave=False, dynamic_ncols=True)
-            self.bar.set_postfix_str(self.postfix, refresh=False)
+                            leave=False, dynamic_ncols=True, initial=n, postfix=self.postfix or None)
+            return
         self.bar.update(n)
 
     def set_postfix_str(self, text: str, refresh: bool = True) -> None:

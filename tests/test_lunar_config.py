@@ -103,7 +103,7 @@ def test_describe_and_label_name_the_configuration():
     assert "\n" not in line
     assert SCENARIO.label(config) == "HARD-RT-n50-7.5Wh-runs4-5"
     assert "options" not in SCENARIO.describe(SCENARIO.load(None))
-    assert "; run 3 (seed 0)" in SCENARIO.describe(SCENARIO.load(None, ["runs=1", "first_run=3"]))
+    assert "; run 3 (root seed 0)" in SCENARIO.describe(SCENARIO.load(None, ["runs=1", "first_run=3"]))
 
 
 def _every_key_hostile():

@@ -167,8 +167,9 @@ def test_run_writes_one_summary_row_per_trial_and_the_time_series(tmp_path, caps
     assert list(last.loc[[3, 4]]) == summary["work"]  # cumulative work ends at the trial's W
     # the summary: every metric with mean, sd, min-max; the bounds beside work and efficiency
     params = Params(strategy="mobile", n_chargers=6, ticks=300, trials=2)
-    for label in ("work [points]", "total energy", "work energy", "efficiency", "efficiency with loss",
-                  "depleted workers", "depleted chargers", "shared [energy]", "lost [energy]"):
+    for label in ("work [points]", "total energy [units]", "work energy [units]", "efficiency [fraction]",
+                  "  with loss [fraction]", "depleted workers [robots]", "depleted chargers [robots]",
+                  "shared [energy units]", "lost [energy units]"):
         assert f"\n  {label}" in printed
     assert f"{constant_supply_bounds(params).work:,.0f} (W_cs)" in printed
     assert f"{constant_supply_bounds(params).efficiency:.4f} (E_cs)" in printed

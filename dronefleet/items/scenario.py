@@ -165,8 +165,12 @@ def describe(config: Config) -> str:
     world = (counted(p.locations, "random location") if p.foraging
              else f"{counted(p.n_locations, 'grid location')} (N_s {p.grid_spacing:g}, {p.grid_edge})")
     return (f"{p.mode} ({p.truth}), {world}, {p.algorithm}: {counted(p.n_robots, 'robot')}, capacity {p.capacity}, "
-            f"speed {p.speed:g}; trials {p.first_trial}-{p.first_trial + p.trials - 1} (seed {p.seed}) "
-            f"x {p.steps} steps")
+            f"speed {p.speed:g}; {_trials(p.first_trial, p.trials)} (root seed {p.seed}) x {counted(p.steps, 'step')}")
+
+
+def _trials(first: int, trials: int) -> str:
+    """``trial 3`` or ``trials 1-20``."""
+    return f"trial {first}" if trials == 1 else f"trials {first}-{first + trials - 1}"
 
 
 def label(config: Config) -> str:

@@ -174,7 +174,7 @@ def describe(config: Config) -> str:
     p = config
     runs = f"run {p.first_run}" if p.runs == 1 else f"runs {p.first_run}-{p.first_run + p.runs - 1}"
     return (f"{p.layout} (scale {p.layout_scale:g}), {counted(p.n_robots, 'robot')}, {p.battery_wh:g} Wh, "
-            f"v0 {p.v0:g} m/s, eps {p.eps:g}{_options(p)}; {runs} (seed {p.seed}) x {p.duration_s:g} s "
+            f"v0 {p.v0:g} m/s, eps {p.eps:g}{_options(p)}; {runs} (root seed {p.seed}) x {p.duration_s:g} s "
             f"({p.ticks:,} ticks)")
 
 
@@ -186,9 +186,9 @@ def label(config: Config) -> str:
 
 _SUMMARY_ROWS = (("resources returned [units]", "resources", ",.1f"), ("trips (unloads)", "trips", ",.1f"),
                  ("recharging interruptions", "interruptions", ",.1f"), ("charging sessions", "sessions", ",.1f"),
-                 ("deaths", "deaths", ",.2f"), ("beacons at the end", "beacons", ",.1f"),
-                 ("alignment T (to target)", "alignment_T", ".3f"), ("alignment N (to nest)", "alignment_N", ".3f"),
-                 ("alignment R (to recharge)", "alignment_R", ".3f"))
+                 ("deaths [robots]", "deaths", ",.2f"), ("beacons at the end [robots]", "beacons", ",.1f"),
+                 ("alignment T [cosine]", "alignment_T", ".3f"), ("alignment N [cosine]", "alignment_N", ".3f"),
+                 ("alignment R [cosine]", "alignment_R", ".3f"))
 
 
 def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:

@@ -192,9 +192,11 @@ def describe(config: Config) -> str:
     p = config.params
     chargers = (f"{counted(p.n_chargers, 'mobile charger')} (phi {p.charger_capacity_factor:g})" if p.mobile
                 else "fixed chargers")
+    first, last = config.first_trial, config.last_trial
+    trials = (f"trial {first} (seed {TRIAL_SEED_FACTOR * first})" if first == last else
+              f"trials {first}-{last} (trial k: seed {TRIAL_SEED_FACTOR} k)")
     return (f"{counted(p.n_workers, 'worker')}, {chargers}, r {p.work_ratio:g}, k {p.charge_rate:g}, "
-            f"lambda {p.transfer_loss:g}, trials {config.first_trial}-{config.last_trial} "
-            f"(seeds {TRIAL_SEED_FACTOR} k) x {p.ticks} ticks")
+            f"lambda {p.transfer_loss:g}, {trials} x {counted(p.ticks, 'tick')}")
 
 
 def label(config: Config) -> str:

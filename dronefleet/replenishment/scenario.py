@@ -108,14 +108,14 @@ def simulate(config: Config) -> dict[str, pyarrow.Table]:
 # (label, column, format, which bound sits beside it: "work", "efficiency" or None)
 _SUMMARY_ROWS = (
     ("work [points]", "work", ",.1f", "work"),
-    ("total energy", "energy", ",.1f", None),
-    ("work energy", "work_energy", ",.1f", None),
-    ("efficiency", "efficiency", ".4f", "efficiency"),
-    ("efficiency with loss", "efficiency_with_loss", ".4f", "efficiency"),
-    ("depleted workers", "depleted_workers", ".2f", None),
-    ("depleted chargers", "depleted_chargers", ".2f", None),
-    ("shared [energy]", "shared", ",.1f", None),
-    ("lost [energy]", "lost", ",.1f", None),
+    ("total energy [units]", "energy", ",.1f", None),
+    ("work energy [units]", "work_energy", ",.1f", None),
+    ("efficiency [fraction]", "efficiency", ".4f", "efficiency"),
+    ("  with loss [fraction]", "efficiency_with_loss", ".4f", "efficiency"),
+    ("depleted workers [robots]", "depleted_workers", ".2f", None),
+    ("depleted chargers [robots]", "depleted_chargers", ".2f", None),
+    ("shared [energy units]", "shared", ",.1f", None),
+    ("lost [energy units]", "lost", ",.1f", None),
 )
 
 
@@ -136,7 +136,7 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         note = None
     except BoundUndefinedError as error:
         beside, note = {}, f"no bound: {error}"
-    lines = [f"  {'over ' + counted(summary.num_rows, 'trial'):<22}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
+    lines = [f"  {'over ' + counted(summary.num_rows, 'trial'):<26}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
              "   bound"]
     for text, column, fmt, bound in _SUMMARY_ROWS:
         x = np.array(summary.column(column).to_pylist(), dtype=np.float64)  # to_numpy imports pandas
@@ -144,7 +144,7 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         shown = beside.get(bound, "")
         if p.mobile and column == "efficiency" and p.transfer_loss != 0:
             shown = ""
-        lines.append(f"  {text:<22}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}   {shown}"
+        lines.append(f"  {text:<26}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}   {shown}"
                      .rstrip())
     work = np.array(summary.column("work").to_pylist(), dtype=np.float64)
     if note is None and not p.mobile and work.max() > b.work:  # docs/replenishment-model.md section 9

@@ -94,7 +94,7 @@ def test_a_sweep_of_every_scenario_plans_runs_resumes_and_collects(name, tmp_pat
         data = sw.dataset(s, out, table).to_table()
         assert data.num_rows == sum(pq.read_metadata(run.path(out, table)).num_rows for run in s.runs)
         for key in keys:
-            assert data.schema.field(key).type == ARROW_TYPES[type(scenario.defaults[key])]
+            assert data.schema.field(key).type == ARROW_TYPES[type(scenario.defaults[sw.config_key(scenario, key)])]
 
 
 # ---------------------------------------------------------------------------- [[grid]] unions

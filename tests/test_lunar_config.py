@@ -357,7 +357,7 @@ def test_a_switch_is_a_partition_key_of_its_own_type():
     # los_bodies, a bool, is a grid key of the E4 sweep: its dataset's partition column is a bool
     sweep = sw.load_sweep(SWEEPS / "lunar-e4.toml")
     schema = sw._partition_schema(sweep)
-    assert schema.field("los_bodies").type == pa.bool_() and schema.field("first_run").type == pa.int64()
+    assert schema.field("los_bodies").type == pa.bool_() and schema.field("root_seed").type == pa.int64()
     assert schema.field("layout").type == pa.string() and schema.field("battery_wh").type == pa.float64()
 
 

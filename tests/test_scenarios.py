@@ -143,9 +143,10 @@ def test_set_takes_bare_and_section_keys_with_strict_types():
 
 
 def _run(tmp_path, *sets, out="run"):
-    args = ["run", str(REPLENISHMENT), "--set", "trials=2", "--set", "ticks=300"]
-    for s in sets:
-        args += ["--set", s]
+    changes = {"trials": "2", "ticks": "300", **dict(s.split("=", 1) for s in sets)}  # each key once
+    args = ["run", str(REPLENISHMENT)]
+    for key, value in changes.items():
+        args += ["--set", f"{key}={value}"]
     assert cli.main([*args, "--out", str(tmp_path / out)]) == 0
     return tmp_path / out
 

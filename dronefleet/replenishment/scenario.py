@@ -58,8 +58,8 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "REPLICATE_NOUN",
            "NO_SEED", "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict",
-           "read_config", "table_schemas", "columns", "simulate", "format_summary", "describe", "label", "format_bounds",
-           "replay_data", "study"]
+           "read_config", "table_schemas", "columns", "simulate", "format_summary", "describe", "label",
+           "format_bounds", "replay_data", "study"]
 
 TABLES = ("summary", "timeseries")
 #: Figures of ``dronefleet reproduce`` drawn from this scenario (fig09..fig12 come with

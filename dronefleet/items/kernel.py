@@ -20,7 +20,7 @@ are the same for every algorithm, n, c and s: trials with the same index are pai
 import numpy as np
 
 from ..fpmath import exp, log
-from ..jit import njit
+from ..jit import borrowing, njit
 from ..rng import lane_u64, normal_pair, seed_stream, uniform, unit
 
 # Modes, truths, algorithms, CAS variants (the ints the Python layer passes in ``opts``).
@@ -484,10 +484,51 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     ``given_par`` (M1,) true parameters used when ``opts[O_DRAW_PARAMS]`` is 0. ``trace``
     (T + 1, n, 4) and ``trace_counts`` (T + 1, M1) record the first trial step by step when
     their first axis is not empty (tests, replay). ``stop`` (1,) int8: Ctrl-C, checked every step.
+    Allocates the state once; :func:`run_trial` runs each trial in it.
     """
+    n = opts[O_ROBOTS]
+    m1 = grid_pos.shape[0]
+    rows = n if opts[O_PRIVATE] != 0 else 1
+    travel = np.empty((m1, m1))     # float64: the value loops convert no integer
+    travel_table(grid_pos, pars[P_SPEED], travel)
+    world = (grid_pos.copy(), travel, given_par.copy())
+    generation = (np.zeros((4, m1), dtype=np.uint64), np.zeros((POISSON_LEVELS, m1), dtype=np.int64),
+                  np.zeros(m1, dtype=np.int64), np.ones(m1, dtype=np.int64), np.zeros(m1), np.ones(m1))
+    locations = (np.zeros(m1, dtype=np.int64), np.zeros(m1), np.zeros((rows, m1)), np.zeros((rows, m1)),
+                 np.zeros(m1), np.zeros(m1, dtype=np.int64))
+    robots = (np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64),
+              np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64),
+              np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_))
+    scratch = (np.zeros(m1), np.zeros(m1, dtype=np.int64))
+    rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
+    for tr in range(seeds.shape[0]):
+        if stop[0] != 0:
+            break
+        run_trial(opts, pars, seeds[tr], rng, world, generation, locations, robots, scratch,
+                  totals[tr], per_robot[tr], trace if tr == 0 else trace[:0], trace_counts, stop)
+
+
+@borrowing(error_model='numpy', nogil=True)
+def run_trial(opts, pars, seed, rng, world, generation, locations, robots, scratch, totals, per_robot, trace,
+              trace_counts, stop):
+    """One trial from its root ``seed``, in the state :func:`run_trials` allocated (it allocates
+    nothing, so numba counts no references: each would be an atomic operation per array at every
+    decision). ``world`` = (positions (M1, 2), travel times (M1, M1), true parameters (M1,));
+    ``generation`` = (streams (4, M1), thresholds (POISSON_LEVELS, M1), scratch draws, Poisson
+    parts, part means, their exp(-mean)) (:func:`seed_generation`); ``locations`` = (counts,
+    populations, observed (rows, M1), observed at (rows, M1), ear-marks, owners); ``robots`` =
+    (node, destination, origin, arrival step, payload, assigned location, SF sleep, SF leave step,
+    arrived) (n,) each; ``scratch`` = (values (M1,), near-top indices (M1,)). Results into
+    ``totals`` (N_TOTALS,) and ``per_robot`` (n, N_PER_ROBOT); ``trace`` as in :func:`run_trials`
+    (empty: not traced)."""
     mode, truth, algorithm = opts[O_MODE], opts[O_TRUTH], opts[O_ALG]
     steps, capacity, n = opts[O_STEPS], opts[O_CAPACITY], opts[O_ROBOTS]
-    m1 = grid_pos.shape[0]
+    pos, travel, truth_par = world
+    lanes, threshold, draws, parts, part_mean, part_exp = generation
+    count, population, observed, observed_at, earmark, owner = locations
+    node, dest, origin, arrive_at, y, assigned, sleep, leave_at, arrived = robots
+    value, near_top = scratch
+    m1 = pos.shape[0]
     m = m1 - 1
     foraging = mode == MODE_FP
     private = opts[O_PRIVATE] != 0
@@ -495,145 +536,111 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     m_min, x0, reach = pars[P_MMIN], pars[P_X0], pars[P_OBS_RANGE]
     target = 0.5 * big_k + capacity
     earmarking = algorithm == ALG_GR or algorithm == ALG_GRIC
-    uses_assignment = algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF
-
-    rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
-    pos = grid_pos.copy()
-    travel = np.empty((m1, m1))     # float64: the value loops convert no integer
-    travel_table(pos, pars[P_SPEED], travel)
-    truth_par = given_par.copy()
-    lanes = np.zeros((4, m1), dtype=np.uint64)     # location j's generation stream in column j
-    threshold = np.zeros((POISSON_LEVELS, m1), dtype=np.int64)
-    draws = np.zeros(m1, dtype=np.int64)
-    parts = np.ones(m1, dtype=np.int64)
-    part_mean = np.zeros(m1)
-    part_exp = np.ones(m1)
-    count = np.zeros(m1, dtype=np.int64)
-    population = np.zeros(m1)
-    rows = n if private else 1
-    observed = np.zeros((rows, m1))
-    observed_at = np.zeros((rows, m1))
-    earmark = np.zeros(m1)
-    value = np.zeros(m1)
-    near_top = np.zeros(m1, dtype=np.int64)
-    owner = np.zeros(m1, dtype=np.int64)
-    node = np.zeros(n, dtype=np.int64)
-    dest = np.zeros(n, dtype=np.int64)
-    origin = np.zeros(n, dtype=np.int64)
-    arrive_at = np.zeros(n, dtype=np.int64)
-    y = np.zeros(n, dtype=np.int64)
-    assigned = np.zeros(n, dtype=np.int64)
-    sleep = np.zeros(n, dtype=np.int64)
-    leave_at = np.zeros(n, dtype=np.int64)
-    arrived = np.zeros(n, dtype=np.bool_)
     tracing = trace.shape[0] > 0
 
-    for tr in range(seeds.shape[0]):
+    for s in range(STREAM_ROBOT + n):
+        seed_stream(rng, 0, s, seed, s)
+    draw_world(opts, pars, m, rng, pos, truth_par)
+    if opts[O_DRAW_POSITIONS]:
+        travel_table(pos, pars[P_SPEED], travel)
+    if truth != LOGISTIC:
+        seed_generation(truth, seed, truth_par, rng, lanes, threshold, parts, part_mean, part_exp)
+    count[:] = 0
+    population[:] = x0
+    observed[:, :] = x0 if truth == LOGISTIC else 0.0
+    observed_at[:, :] = 0.0
+    owner[:] = 0
+    earmark[:] = 0.0                 # every robot at home: nothing ear-marked
+    node[:] = 0
+    dest[:] = 0
+    y[:] = 0
+    assigned[:] = 0
+    sleep[:] = 0
+    leave_at[:] = 0
+    arrived[:] = False
+    generated = 0
+    served = 0
+    picked = 0
+    removed = 0.0
+    per_robot[:, :] = 0
+    if algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF:
+        assign_locations(min(n, m), rng, owner, assigned)
+    spare, have = 0.0, False
+    for t in range(0, steps + 1):
         if stop[0] != 0:
             break
-        for s in range(STREAM_ROBOT + n):
-            seed_stream(rng, 0, s, seeds[tr], s)
-        draw_world(opts, pars, m, rng, pos, truth_par)
-        if opts[O_DRAW_POSITIONS]:
-            travel_table(pos, pars[P_SPEED], travel)
-        if truth != LOGISTIC:
-            seed_generation(truth, seeds[tr], truth_par, rng, lanes, threshold, parts, part_mean, part_exp)
-        count[:] = 0
-        population[:] = x0
-        observed[:, :] = x0 if truth == LOGISTIC else 0.0
-        observed_at[:, :] = 0.0
-        owner[:] = 0
-        earmark[:] = 0.0                 # every robot at home: nothing ear-marked
-        node[:] = 0
-        dest[:] = 0
-        y[:] = 0
-        assigned[:] = 0
-        sleep[:] = 0
-        leave_at[:] = 0
-        arrived[:] = False
-        generated = 0
-        served = 0
-        picked = 0
-        removed = 0.0
-        per_robot[tr, :, :] = 0
-        if uses_assignment:
-            assign_locations(min(n, m), rng, owner, assigned)
-        spare, have = 0.0, False
-        for t in range(0, steps + 1):
-            if stop[0] != 0:
-                break
-            if t > 0:
-                # 1. generation, every location; Bernoulli and Poisson from each location's own
-                # stream, in loops that vectorise (the inversion only where an arrival is due)
-                if truth == BERNOULLI:
-                    generated += bernoulli_step(lanes, threshold[0], count)
-                elif truth == POISSON:
-                    generated += poisson_step(lanes, threshold, count, draws, parts, part_mean, part_exp)
-                else:
-                    spare, have = logistic_step(growth, big_k, noise, rng, population, spare, have)
-                # 2. movement: robots due at their destination arrive
-                for i in range(n):
-                    if node[i] < 0 and arrive_at[i] == t:
-                        node[i] = dest[i]
-                        arrived[i] = True
-            # 3. robots at a node, in id order: serve, observe, decide
+        if t > 0:
+            # 1. generation, every location; Bernoulli and Poisson from each location's own
+            # stream, in loops that vectorise (the inversion only where an arrival is due)
+            if truth == BERNOULLI:
+                generated += bernoulli_step(lanes, threshold[0], count)
+            elif truth == POISSON:
+                generated += poisson_step(lanes, threshold, count, draws, parts, part_mean, part_exp)
+            else:
+                spare, have = logistic_step(growth, big_k, noise, rng, population, spare, have)
+            # 2. movement: robots due at their destination arrive
             for i in range(n):
-                a = node[i]
-                if a < 0:
-                    continue
-                row = i if private else 0
-                if a == 0:
-                    if arrived[i]:
-                        per_robot[tr, i, R_TRIPS] += 1
-                        if algorithm == ALG_SF:
-                            leave_at[i] = t + sleep[i]     # A29: the arrival step is the first sleep step
-                    if foraging and not opts[O_COUNT_PICKUP]:
-                        served += y[i]
-                        per_robot[tr, i, R_ITEMS] += y[i]
-                    y[i] = 0
-                else:
-                    if arrived[i]:
-                        per_robot[tr, i, R_VISITS] += 1
-                    if truth == LOGISTIC and algorithm == ALG_SF and arrived[i] and a == assigned[i]:
-                        stock = np.floor(population[a])
-                        sleep[i] = max(0, int(np.floor(sleep[i] + pars[P_KP] * (target - stock) + 0.5)))
-                    k, seen = take_at_location(truth, opts[O_OBS_REAL], a, capacity - y[i], m_min, count, population)
-                    if truth == LOGISTIC:
-                        removed += k
-                    y[i] += k
-                    picked += k
-                    if earmarking:
-                        earmark[a] -= k              # its c - y_i, still ear-marked at a, shrinks
-                    if not foraging or opts[O_COUNT_PICKUP]:
-                        served += k
-                        per_robot[tr, i, R_ITEMS] += k
-                    observed[row, a] = seen
-                    observed_at[row, a] = t
-                arrived[i] = False
-                b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
-                           assigned, owner, leave_at, rng, value, near_top)
-                if b != STAY and b != a:
-                    if earmarking:
-                        earmark_move(earmark, capacity, y[i], a, b)
-                    node[i] = -1
-                    origin[i] = a
-                    dest[i] = b
-                    arrive_at[i] = t + int(travel[a, b])     # one jump: no count-down per step
-            if reach > 0.0:
-                observe_in_range(t, reach, pos, travel, node, origin, dest, arrive_at, private, opts[O_OBS_REAL],
-                                 truth, count, population, observed, observed_at)
-            if tracing and tr == 0:
-                record_step(t, node, dest, arrive_at, y, count, population, truth, trace[t], trace_counts[t])
-        if truth == LOGISTIC:            # A19: net growth of the stock, foraged included
-            stock = 0.0
-            for j in range(1, m1):
-                stock += population[j]
-            generated = int(np.floor(stock + removed - m * x0))
-        totals[tr, T_GENERATED] = generated
-        totals[tr, T_SERVED] = served
-        totals[tr, T_PICKED] = picked
-        totals[tr, T_VISITS] = per_robot[tr, :, R_VISITS].sum()
-        totals[tr, T_TRIPS] = per_robot[tr, :, R_TRIPS].sum()
+                if node[i] < 0 and arrive_at[i] == t:
+                    node[i] = dest[i]
+                    arrived[i] = True
+        # 3. robots at a node, in id order: serve, observe, decide
+        for i in range(n):
+            a = node[i]
+            if a < 0:
+                continue
+            row = i if private else 0
+            if a == 0:
+                if arrived[i]:
+                    per_robot[i, R_TRIPS] += 1
+                    if algorithm == ALG_SF:
+                        leave_at[i] = t + sleep[i]     # A29: the arrival step is the first sleep step
+                if foraging and not opts[O_COUNT_PICKUP]:
+                    served += y[i]
+                    per_robot[i, R_ITEMS] += y[i]
+                y[i] = 0
+            else:
+                if arrived[i]:
+                    per_robot[i, R_VISITS] += 1
+                if truth == LOGISTIC and algorithm == ALG_SF and arrived[i] and a == assigned[i]:
+                    stock = np.floor(population[a])
+                    sleep[i] = max(0, int(np.floor(sleep[i] + pars[P_KP] * (target - stock) + 0.5)))
+                k, seen = take_at_location(truth, opts[O_OBS_REAL], a, capacity - y[i], m_min, count, population)
+                if truth == LOGISTIC:
+                    removed += k
+                y[i] += k
+                picked += k
+                if earmarking:
+                    earmark[a] -= k              # its c - y_i, still ear-marked at a, shrinks
+                if not foraging or opts[O_COUNT_PICKUP]:
+                    served += k
+                    per_robot[i, R_ITEMS] += k
+                observed[row, a] = seen
+                observed_at[row, a] = t
+            arrived[i] = False
+            b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
+                       assigned, owner, leave_at, rng, value, near_top)
+            if b != STAY and b != a:
+                if earmarking:
+                    earmark_move(earmark, capacity, y[i], a, b)
+                node[i] = -1
+                origin[i] = a
+                dest[i] = b
+                arrive_at[i] = t + int(travel[a, b])     # one jump: no count-down per step
+        if reach > 0.0:
+            observe_in_range(t, reach, pos, travel, node, origin, dest, arrive_at, private, opts[O_OBS_REAL],
+                             truth, count, population, observed, observed_at)
+        if tracing:
+            record_step(t, node, dest, arrive_at, y, count, population, truth, trace[t], trace_counts[t])
+    if truth == LOGISTIC:            # A19: net growth of the stock, foraged included
+        stock = 0.0
+        for j in range(1, m1):
+            stock += population[j]
+        generated = int(np.floor(stock + removed - m * x0))
+    totals[T_GENERATED] = generated
+    totals[T_SERVED] = served
+    totals[T_PICKED] = picked
+    totals[T_VISITS] = per_robot[:, R_VISITS].sum()
+    totals[T_TRIPS] = per_robot[:, R_TRIPS].sum()
 
 
 @njit(cache=True, error_model='numpy')

@@ -53,6 +53,7 @@ TR_NODE, TR_DEST, TR_LEFT, TR_Y = range(4)
 
 STAY = -1
 TIE_REL = 1e-12            # A25: values within 1e-12 relative are equal
+MINUS_ONE_BITS = int(np.array(-1.0).view(np.int64))   # -1.0's bits read as an int64 (negative)
 TRAVEL_GUARD = 1e-9        # A6: ceil(D/s - 1e-9), float noise never adds a step
 POISSON_LEVELS = 4         # Poisson counts below 4 read from thresholds, in a loop that vectorises
 POISSON_CHUNK = 16.0       # Poisson(lambda) as a sum of ceil(lambda/16) inversions (exp(-16) >> underflow)
@@ -362,19 +363,16 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream, 
     robot's own node is overwritten; so is ``near_top`` (M1,) int64."""
     if a > 0:
         value[a] = -1.0                  # below every value: never the best, never tied
-    # the greatest value, in four independent running maxima (exact: max is associative)
-    top0 = top1 = top2 = top3 = -1.0
-    b = 1
-    while b + 3 <= m:
-        top0 = max(top0, value[b])
-        top1 = max(top1, value[b + 1])
-        top2 = max(top2, value[b + 2])
-        top3 = max(top3, value[b + 3])
-        b += 4
-    while b <= m:
-        top0 = max(top0, value[b])
-        b += 1
-    top = max(max(top0, top1), max(top2, top3))
+    # The greatest value, as the greatest bit pattern: non-negative doubles order as their bits
+    # read as int64 do, and every negative one (-1, -0.0) reads below them; a maximum of integers
+    # vectorises, one of doubles does not (NaN rules). Where the values differ (no positive value)
+    # the top beats no baseline (>= 0) either way.
+    bits = value.view(np.int64)
+    top_bits = MINUS_ONE_BITS
+    for b in range(1, m + 1):
+        top_bits = max(top_bits, bits[b])
+    near_top[0] = top_bits
+    top = near_top.view(np.float64)[0]
     if not greater(top, baseline):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top

@@ -1,10 +1,16 @@
-"""MkDocs and griffe hooks of the documentation site (mkdocs.yml): the results page, Sphinx roles.
+"""MkDocs and griffe hooks of the documentation site (mkdocs.yml): the results page, the tables
+pages, the tutorials, Sphinx roles.
 
 results/README.md and its figures live beside the results they describe, not in docs/; they are
 added to the site as the page ``results/README.md`` (served as results/). Links between docs/ and
 results/ are written relative to the repository, so that they work when browsing it
 (``docs/delivery-experiments.md`` -> ``../results/README.md``); on the site, where docs/ is the
 root, they are pointed at the same pages.
+
+The pages ``tables/<scenario>.md`` are written here, one per registered scenario, from its
+``table_schemas()`` (the columns and their types) and its ``columns()`` (what each holds, with its
+unit): a column without a description stops the build. Every notebook of ``docs/tutorials/`` is a
+page of the section "Tutorials" (mkdocs-jupyter renders it), in the order of its file name.
 
 The docstrings name objects with Sphinx roles (``:func:`run```), which Markdown would show
 verbatim, and document constants and protocol members with comments (``#:`` above a constant, as
@@ -20,6 +26,7 @@ import re
 from pathlib import Path
 
 from griffe import Docstring, Extension, Object
+from mkdocs.exceptions import PluginError
 from mkdocs.structure.files import File, Files
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,11 +49,64 @@ def _results_files() -> list[str]:
     return [f"{RESULTS}/README.md", *sorted(f for f in figures if f.startswith(f"{RESULTS}/") and (ROOT / f).is_file())]
 
 
+#: The folder of the generated table pages, and of the notebooks, inside the site.
+TABLES, TUTORIALS = "tables", "tutorials"
+#: The nav section the notebooks are added to, after its index page.
+TUTORIALS_SECTION = "Tutorials"
+
+
+def on_config(config):
+    """The notebooks of docs/tutorials/ (by file name) appended to the nav's Tutorials section."""
+    notebooks = [f"{TUTORIALS}/{path.name}" for path in sorted((ROOT / "docs" / TUTORIALS).glob("*.ipynb"))]
+    for section in config["nav"]:
+        for entry in section.get("User guide", []) if isinstance(section, dict) else []:
+            if isinstance(entry, dict) and TUTORIALS_SECTION in entry:
+                index = entry[TUTORIALS_SECTION]
+                entry[TUTORIALS_SECTION] = [*([index] if isinstance(index, str) else index), *notebooks]
+    return config
+
+
 def on_files(files: Files, config) -> Files:
     for path in _results_files():
         files.append(File(path, src_dir=str(ROOT), dest_dir=config["site_dir"],
                           use_directory_urls=config["use_directory_urls"]))
+    for name, text in table_pages().items():
+        files.append(File.generated(config, f"{TABLES}/{name}.md", content=text))
     return files
+
+
+def table_pages() -> dict[str, str]:
+    """``{page name: Markdown}``: ``index`` and one page per registered scenario, each of its
+    tables a section with a row per column (name, type, unit, meaning)."""
+    from dronefleet import scenarios
+
+    index = ["# Tables and their columns", "",
+             "Every run writes its tables as parquet files (`dronefleet run --out`, `Run.save`; a sweep writes "
+             "one dataset per table), and `dronefleet.run` returns them as pandas DataFrames. Each page lists "
+             "every column of a scenario's tables: its type, its unit and what it holds. A unit `count` is a "
+             "number of events or things, `index` a number that names one, `1` a plain ratio; a column without "
+             "a unit holds words, flags or a seed.", "",
+             "| scenario | tables |", "|---|---|"]
+    pages = {}
+    for name, scenario in scenarios.SCENARIOS.items():  # the built-in ones: what this package ships
+        schemas, documented = scenario.table_schemas(), scenario.columns()
+        lines = [f"# {name}: tables", "",
+                 f"The tables of a `{name}` run (`dronefleet run {name}`), made from the scenario's "
+                 f"`table_schemas()` and `columns()`.", ""]
+        for table, schema in schemas.items():
+            lines += [f"## {table}", "", "| column | type | unit | what it holds |", "|---|---|---|---|"]
+            for field in schema:
+                column = documented.get(table, {}).get(field.name)
+                if column is None or not column.doc.strip():
+                    raise PluginError(f"the column {field.name!r} of the {name} table {table!r} has no "
+                                      f"description: add it to the scenario's columns()")
+                lines.append(f"| `{field.name}` | `{field.type}` | {column.unit or '-'} | "
+                             f"{column.doc.replace('|', '&#124;')} |")
+            lines.append("")
+        pages[name] = "\n".join(lines)
+        index.append(f"| [{name}]({name}.md) | {', '.join(f'[`{t}`]({name}.md#{t})' for t in schemas)} |")
+    pages["index"] = "\n".join(index) + "\n"
+    return pages
 
 
 def on_page_markdown(markdown: str, page, config, files: Files) -> str:

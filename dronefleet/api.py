@@ -8,7 +8,8 @@ line: :func:`run` is ``dronefleet run`` (its :meth:`Run.save` writes the same by
 
 Configs and changes are given as on the command line. ``config`` (``base`` of a sweep) is
 None (the paper's delivery scenario), a registered scenario's name (its defaults:
-``"replenishment"``) or the path of a TOML config file. Changes are config keys, bare
+``"delivery"``, ``"replenishment"``, ``"items"``, ``"lunar"``)
+or the path of a TOML config file. Changes are config keys, bare
 (``tau_minutes=20``, ``rule="random"``) or, in the ``set`` dict, also as ``section.key``
 (``set={"auction.rule": "random"}``); values have the types of a config file (an int is
 taken for a float, never the reverse). ``seed`` / ``seeds`` set the scenario's seed key
@@ -184,8 +185,13 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
     ----------
     config : str, path or None
         None: the paper's delivery scenario (``configs/paper.toml``); a registered scenario's
-        name (``"delivery"``, ``"replenishment"``, or one installed from another package): its
-        defaults; else a TOML config file of any scenario (it names its own).
+        name: its defaults. The built-in ones: ``"delivery"`` (on-demand delivery by a learning,
+        auction-bidding UAV fleet; OpenSwarm D4.4, Talamali et al. AAMAS 2025), ``"replenishment"``
+        (energy replenishment by fixed and mobile chargers; OpenSwarm D4.4), ``"items"``
+        (multi-robot item delivery and foraging; Liemhetcharat et al., Robotics 2015) and
+        ``"lunar"`` (beacon-guided lunar foraging with recharging; Angyal, TU Delft MSc thesis
+        2024); or one installed from another package. Else a TOML config file of any scenario
+        (it names its own).
     seed : int, optional
         The scenario's seed key: delivery's ``seed`` (all randomness derives from it,
         0 .. 2**63 - 1), replenishment's ``first_trial`` (trial k uses seed 876 k).

@@ -3,8 +3,11 @@
 ``dronefleet configs``; ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce
 FIGURE...|all [--quick]``, ``--list``; ``dronefleet replay RUN_DIR|DATASET [--run KEY=VALUE ...] [--out FILE.html]
 [--trial K]``.
-A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...`` it is delivery.
-CONFIG and SWEEP are paths, or the names of shipped files (``replenishment``, ``rules``: ``dronefleet configs``).
+Four scenarios: delivery (UAV delivery with auctions and online learning), replenishment (energy
+replenishment by fixed and mobile chargers), items (item delivery and foraging), lunar (lunar foraging
+with recharging). A config names its scenario (:mod:`dronefleet.scenarios`); without ``scenario = ...``
+it is delivery. CONFIG and SWEEP are paths, or the names of shipped files (``replenishment``, ``items``,
+``lunar``, ``rules``: ``dronefleet configs``).
 ``-q`` prints warnings and errors only, ``-v`` adds debugging detail (before or after the command)."""
 
 import argparse
@@ -437,7 +440,7 @@ def _add_sweep_commands(commands):
 
 def _add_reproduce_command(commands, arguments):
     """``dronefleet reproduce FIGURE``; the work is in :mod:`dronefleet.reproduce`."""
-    p = commands.add_parser("reproduce", help="reproduce a figure of the study (runs what is missing)",
+    p = commands.add_parser("reproduce", help="reproduce a figure of the studies (runs what is missing)",
                             description="See results/README.md for what each figure runs and shows.")
     if not arguments:
         return

@@ -22,8 +22,8 @@ if TYPE_CHECKING:
     import pandas
     import pyarrow
 
-__all__ = ["ENTRY_POINT_GROUP", "Field", "ScenarioContract", "REQUIRED", "OPTIONAL", "StudyContext", "FigureStudy",
-           "STUDY_OPTIONAL", "contract_problems", "study_problems", "check_configurations"]
+__all__ = ["ENTRY_POINT_GROUP", "Field", "Column", "ScenarioContract", "REQUIRED", "OPTIONAL", "StudyContext",
+           "FigureStudy", "STUDY_OPTIONAL", "contract_problems", "study_problems", "check_configurations"]
 
 #: Entry-point group of scenarios installed from other packages: name -> the scenario object.
 ENTRY_POINT_GROUP = "dronefleet.scenarios"
@@ -36,6 +36,15 @@ class Field:
     section: str
     unit: str
     allowed: str
+    doc: str
+
+
+@dataclass(frozen=True)
+class Column:
+    """Documentation of one column of a table: its unit ("" for words, flags and identifiers;
+    "count", "index" or "1" for plain numbers) and what it holds."""
+
+    unit: str
     doc: str
 
 
@@ -99,8 +108,11 @@ REQUIRED = ("NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEED
 #:   refused; ``run --replay`` calls it before the run.
 #: - ``outdated(config, summary) -> bool``: True if a done run must run again (an input besides its config changed).
 #: - ``study() -> FigureStudy``: its figures' tables, drawings and check for ``dronefleet reproduce``.
+#: - ``columns() -> {table: {column: Column}}``: what every column of its tables holds, with its unit
+#:   (the documentation site's table pages are made from it).
 OPTIONAL = {"format_bounds": ("config",), "replicates": ("config",), "replay_data": ("run_dir",),
-            "check_replayable": ("config",), "outdated": ("config", "summary"), "study": ()}
+            "check_replayable": ("config",), "outdated": ("config", "summary"), "study": (),
+            "columns": ()}
 _PARAMETERS = {"load": ("path", "overrides", "seed"), "resolve_key": ("key",), "replace": ("config", "changes"),
                "value": ("config", "name"), "read_config": ("path",), "table_schemas": (), "simulate": ("config",),
                "format_summary": ("tables",), "describe": ("config",), "label": ("config",), **OPTIONAL}

@@ -43,7 +43,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .config import SCENARIO_KEY, ConfigError, _show, _suggest, one_line, read_toml
-from .contract import ENTRY_POINT_GROUP, FigureStudy, Field, contract_problems
+from .contract import ENTRY_POINT_GROUP, Column, FigureStudy, Field, contract_problems
 from .plugins import importing
 
 if TYPE_CHECKING:
@@ -163,6 +163,11 @@ class Scenario:
 
     def table_schemas(self) -> dict[str, pyarrow.Schema]:
         return self._hook("table_schemas")
+
+    def columns(self) -> dict[str, dict[str, Column]]:
+        """What each column of each table holds (the optional ``columns`` hook): ``{table: {column:
+        Column}}``, empty if the scenario documents none."""
+        return self._hook("columns") if hasattr(self.module, "columns") else {}
 
     def simulate(self, config: Any) -> dict[str, pyarrow.Table]:
         """The run's tables: a dict of exactly the scenario's :attr:`tables`, each a pyarrow Table

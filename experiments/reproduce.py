@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Reproduce a figure of a study: ``python experiments/reproduce.py FIGURE|all [--quick]``, FIGURE one of
-``dronefleet reproduce --list`` (fig09-fig12, fig16-fig20, items-fig01-items-fig12, items-ttests).
+``dronefleet reproduce --list`` (fig09-fig12, fig16-fig20, items-fig01-items-fig12, items-ttests, items-verdicts).
 
 ``experiments/<figure>.py`` are links to this script that reproduce their figure
 (``python experiments/fig16.py --quick``). Same as ``dronefleet reproduce``, options

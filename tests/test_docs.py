@@ -4,6 +4,8 @@ and the links of the README and the docs at files that exist."""
 import re
 from pathlib import Path
 
+from dronefleet import scenarios
+
 ROOT = Path(__file__).resolve().parents[1]
 CITATION = re.compile(r"docs/([\w-]+\.md)(?: sections? (\d+(?:\.\d+)?(?:(?:, | and |-)\d+(?:\.\d+)?)*))?")
 CITING = ("README.md", "docs/guide/*.md", "CONTRIBUTING.md", "dronefleet/**/*.py", "dronefleet/**/*.toml", "configs/**/*.toml",
@@ -85,8 +87,11 @@ def test_every_link_of_the_readme_and_docs_resolves():
     pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 
     def resolves(page, target):
-        # the site's hook (docs/hooks.py) publishes results/ beside docs/: docs/index.md links it as results/
+        # the site's hook (docs/hooks.py) publishes results/ beside docs/: docs/index.md links it as results/;
+        # it writes the tables pages (docs/tables/) too
         at = (page.parent / target).resolve()
+        if at.is_relative_to((ROOT / "docs" / "tables").resolve()):
+            return at.stem in {"index", *scenarios.SCENARIOS}
         site_results = (ROOT / "docs" / "results").resolve()
         return at.exists() or (at.is_relative_to(site_results)
                                and (ROOT / "results" / at.relative_to(site_results)).exists())
@@ -102,3 +107,98 @@ def test_the_user_guide_links_only_inside_docs():
     outside = [f"{page.relative_to(ROOT)}: {target}" for page in sorted((ROOT / "docs" / "guide").glob("*.md"))
                for target in links(page) if docs not in (page.parent / target).resolve().parents]
     assert not outside, "\n".join(outside)
+
+
+# ------------------------------------------------------------------ what every page may name
+
+#: Units a column's name promises by its ending (``duration_s``: seconds).
+UNIT_OF_SUFFIX = {"_s": "s", "_m": "m", "_j": "J", "_wh": "Wh", "_kg": "kg", "_pct": "%", "_minutes": "min",
+                  "_weeks": "week"}
+
+
+def test_every_column_of_every_scenarios_tables_is_documented_with_its_unit():
+    import pyarrow as pa
+
+    for name, scenario in scenarios.SCENARIOS.items():
+        documented = scenario.columns()
+        schemas = scenario.table_schemas()
+        assert set(documented) == set(schemas), name
+        for table, schema in schemas.items():
+            assert set(documented[table]) == set(schema.names), (name, table)
+            for field in schema:
+                column = documented[table][field.name]
+                assert len(column.doc.split()) >= 2, (name, table, field.name)  # a phrase, not a word
+                numeric = pa.types.is_integer(field.type) or pa.types.is_floating(field.type)
+                if numeric and field.name != "seed":
+                    assert column.unit, f"{name} {table}.{field.name} has no unit"
+                for suffix, unit in UNIT_OF_SUFFIX.items():
+                    if field.name.endswith(suffix):
+                        assert column.unit == unit, (name, table, field.name, column.unit)
+
+
+#: The pages a user reads: the docs (the site) and the results page beside the figures.
+USER_PAGES = ["docs/**/*.md", "docs/**/*.ipynb", "results/README.md"]
+#: Words that point at what a user cannot open: the specification the models were written from, the
+#: issue tracker, its numbered lists (``A12``), its numbered rules (``row 5``).
+UNSHIPPED = re.compile(r"(?i:\bspec(?:s|ification)?\b|§|\bissues?\b|#\d+\b|\brows? \d+\b)|\bA\d{1,2}\b")
+
+
+def unshipped_references(text: str) -> list[str]:
+    """What ``text`` names that a user cannot open: the matches of :data:`UNSHIPPED`, and every
+    ``name.md`` that is not a file of the repository."""
+    shipped = {path.name for path in ROOT.rglob("*.md") if not {".venv", "site"} & set(path.parts)}
+    found = [match.group(0) for match in UNSHIPPED.finditer(text)]
+    return found + [name for name in re.findall(r"[\w.-]+\.md\b", text) if name not in shipped]
+
+
+def test_unshipped_references_finds_each_kind():
+    text = ("see the spec, LUNAR-FORAGING.md section 3, A12 and row 5 (issue 30, #12); "
+            "docs/items-model.md and lunar-readings.md are fine, notes.md is not; the specs too; Table A1")
+    assert unshipped_references(text) == ["spec", "A12", "row 5", "issue", "#12", "specs", "A1",
+                                          "LUNAR-FORAGING.md", "notes.md"]
+    assert unshipped_references("Issues of the SPEC, Rows 3") == ["Issues", "SPEC", "Rows 3"]
+
+
+def test_no_user_page_names_an_unshipped_document_or_an_issue():
+    wrong = [f"{path.relative_to(ROOT)}: {', '.join(sorted(set(found)))}"
+             for pattern in USER_PAGES for path in sorted(ROOT.glob(pattern))
+             if (found := unshipped_references(path.read_text(encoding="utf-8")))]
+    assert not wrong, "\n".join(wrong)
+
+
+# ------------------------------------------------------------------ the help names the four studies
+
+STUDIES = {"delivery": "D4.4", "replenishment": "D4.4", "items": "Liemhetcharat", "lunar": "Angyal"}
+
+
+def test_help_of_dronefleet_run_names_every_scenario_and_its_study():
+    import pydoc
+
+    import dronefleet
+
+    text = pydoc.render_doc(dronefleet.run, renderer=pydoc.plaintext)
+    for name, study in STUDIES.items():
+        assert f'"{name}"' in text and study in text, name
+
+
+def test_the_command_lines_help_names_every_scenario():
+    import subprocess
+    import sys
+
+    shown = subprocess.run([sys.executable, "-m", "dronefleet", "--help"], capture_output=True, text=True,
+                           check=True).stdout
+    assert all(re.search(rf"\b{name}\b", shown) for name in STUDIES)
+
+
+def test_the_package_description_and_citation_name_the_four_studies():
+    import tomllib
+
+    import yaml
+
+    description = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["description"]
+    assert all(study in description for study in ("D4.4", "Liemhetcharat", "Angyal"))
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text(encoding="utf-8"))
+    titles = {reference["title"] for reference in citation["references"]}
+    assert {"Multi-Robot Item Delivery and Foraging: Two Sides of a Coin",
+            "Feasibility study of Energetics in Nature-inspired Foraging for Lunar Resource Exploitation",
+            "Deliverable 4.4: Virtual Machines for Swarm Control and Learning"} <= titles

@@ -612,6 +612,46 @@ def test_tick_skip_is_exact(rule, n_uavs, seed, every_tick_rules):
     assert skipped["attempts"].num_rows > 50
 
 
+# Drawn here: rule, fleet size, load, threshold, charging speed (fast charging moves the base time
+# of the skip's u = e^{k (t - base)} several times a run), tick interval, and the UAVs whose SoC
+# weight is turned negative (their bid window closes as they charge) or set to 0.
+RANDOM_SKIP_CASES = 10
+
+
+@pytest.mark.parametrize("case", range(RANDOM_SKIP_CASES))
+def test_tick_skip_is_exact_on_random_runs(case, every_tick_rules):
+    rng = np.random.default_rng(1000 + case)
+    rule = ("least_confident", "most_confident", "random", "reservation", "threshold")[case % 5]
+    base = cfg.replace(cfg.default_config(), horizon_weeks=float(rng.choice([1.0, 2.0])) / 7, seed=case,
+                       n_uavs=int(rng.integers(2, 30)), tau_minutes=float(rng.choice([3.0, 10.0, 30.0])),
+                       theta=float(rng.choice([50.0, 90.0, 100.0])), rule=rule,
+                       charger_power_w=float(rng.choice([100.0, 3000.0, 30000.0])),
+                       advert_interval_s=float(rng.choice([0.5, 2.0, 30.0])))
+    flipped = rng.random(base.n_uavs) < 0.3
+    zeroed = rng.random(base.n_uavs) < 0.1
+    results, states = [], []
+    for config in (base, cfg.replace(base, rule=every_tick_rules[rule])):
+        state = simulation.initial_state(config)
+        state.fleet.coef[flipped, 2] *= -1.0
+        state.fleet.coef[zeroed, 2] = 0.0
+        results.append(delivery_records.tables(run_state(state, config)))
+        states.append(state)
+    skipped, every = results
+    for name in ("orders", "attempts", "fleet", "timeseries"):
+        assert skipped[name].equals(every[name]), name
+    assert states[0].counters[engine.N_AUCTIONS] == states[1].counters[engine.N_AUCTIONS]
+    assert skipped["attempts"].num_rows > 0
+
+
+def test_random_skip_cases_move_the_base_time():
+    """The fast-charging cases above run long enough for u's base time to move (REBASE_EXPONENT)."""
+    config = cfg.replace(cfg.default_config(), horizon_weeks=1.0 / 7, n_uavs=5, charger_power_w=30000.0)
+    state = simulation.initial_state(config)
+    simulation.advance(state, config.horizon_s)
+    assert state.fleet.charge_base[0] > 0.0
+    assert state.params.charge_rate * config.horizon_s > 2 * engine.REBASE_EXPONENT
+
+
 # ============================================================================ determinism
 
 

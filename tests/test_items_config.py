@@ -61,6 +61,7 @@ def test_set_and_seed_reach_the_config_with_strict_types():
     ("algorithm=gr", ("robots.algorithm", "'GR'")),
     ("cas_variant=fastest", ("options.cas_variant", "'max_expected', 'rate', 'gr_no_earmark'")),
     ("ties=first", ("options.ties", "'random', 'lowest_index'")),
+    ("cas_targets=seen", ("options.cas_targets", "'unseen', 'shared'")),
     ("lam_hat=-1", ("robots.lam_hat", "[0, 1000]")),
     ("lam_hat=mu", ("robots.lam_hat", "must be a number")),
     ("seed=-1", ("run.seed",)),
@@ -93,6 +94,7 @@ def test_hostile_set_values_are_refused_in_one_line_and_nothing_is_written(tmp_p
     (["truth=logistic", "mode=delivery"], ('"logistic" is defined for mode "foraging" only',)),
     (["algorithm=SF"], ("SF", "logistic")),
     (["algorithm=GRIC", "mode=delivery", "sharing=destinations"], ("options.sharing",)),
+    (["algorithm=CAS", "cas_variant=gr_no_earmark", "cas_targets=shared"], ("options.cas_targets", "GRIC")),
 ])
 def test_combinations_the_text_does_not_define_are_refused(overrides, fragments):
     with pytest.raises(ConfigError) as error:

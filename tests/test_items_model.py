@@ -11,7 +11,7 @@ import pytest
 
 from dronefleet.items import Params, run_cell, simulate
 from dronefleet.items import kernel as k
-from dronefleet.items.simulate import grid_positions, kernel_inputs
+from dronefleet.items.simulate import grid_positions, kernel_inputs, measures
 from dronefleet.rng import seed_stream
 
 HOME = (0.5, 0.5)
@@ -69,7 +69,7 @@ def test_a_foraging_trip_by_hand():
     assert left == [3, 2, 1, 3, 2, 1, 3]
     assert y == [0, 0, 0, 2, 2, 2, 0]
     assert counts[:, 1].tolist() == [0, 1, 2, 1, 2, 3, 4]
-    generated, served, visits, trips, picked = r["totals"][0]
+    generated, served, visits, trips, picked = r["totals"][0, :k.T_PICKED + 1]   # the summary's totals
     assert (generated, served, visits, trips, picked) == (6, 2, 1, 1, 2)
     summary = simulate(FP_TRIP)["summary"]        # the drawn world differs; only the columns' arithmetic
     assert summary["rate"][0] == pytest.approx(100.0 * summary["served"][0] / summary["generated"][0])
@@ -170,6 +170,77 @@ def test_cas_scores_expected_count_or_count_per_step_and_stays_when_all_are_zero
     assert decide(p, 0, 0, 0, SYMMETRIC, [0, 0, 0, 0]) == k.STAY
     assert decide(p, 0, 3, 1, SYMMETRIC, [0, 0, 0, 0], y=[4]) == k.STAY     # not full, nothing: stays
     assert decide(p, 0, 3, 1, SYMMETRIC, [0, 0, 0, 0], y=[10]) == 0          # full: home
+
+
+def test_cas_sees_the_others_targets_only_with_cas_targets_shared():
+    p = Params(truth="poisson", algorithm="CAS", n_robots=2, capacity=10, speed=0.1, lam_hat=0.0)
+    observed = [0, 0, 4.0, 9.0]             # 9 expected at 3, but another robot with room for 10 heads there
+    for variant in ("max_expected", "rate"):
+        unseen = p.replace(cas_variant=variant)
+        assert decide(unseen, 0, 0, 0, SYMMETRIC, observed, earmark=[0, 0, 0, 10]) == 3
+        assert decide(unseen.replace(cas_targets="shared"), 0, 0, 0, SYMMETRIC, observed, earmark=[0, 0, 0, 10]) == 2
+    shared = p.replace(cas_targets="shared")
+    assert decide(shared, 0, 0, 0, SYMMETRIC, observed, earmark=[0, 0, 0, 5]) == 2   # 9 - 5 = 4: a tie, shorter
+    assert decide(shared, 0, 0, 0, SYMMETRIC, observed, earmark=[0, 0, 4, 10]) == k.STAY   # nothing left for it
+    # the whole kernel at t = 0 (0.3 per step expected: 1.2 at the far location 3, 0.6 at 1 and 2):
+    # unseen, both robots go to 3; shared, the second sees the first's target and takes 1
+    positions, par = np.array(SYMMETRIC), np.array([0.0, 0.3, 0.3, 0.3])
+    both = Params(truth="bernoulli", algorithm="CAS", n_robots=2, capacity=10, speed=0.1, ties="lowest_index",
+                  steps=1)
+    _, trace, _ = trace_of(both, (positions, par))
+    assert trace[0, :, k.TR_DEST].tolist() == [3, 3]
+    _, trace, _ = trace_of(both.replace(cas_targets="shared"), (positions, par))
+    assert trace[0, :, k.TR_DEST].tolist() == [3, 1]
+
+
+def test_shared_targets_count_departures_to_a_location_another_robot_heads_to_or_stands_at():
+    positions, par = np.array(SYMMETRIC), np.array([0.0, 0.3, 0.3, 0.3])
+    both = Params(truth="bernoulli", algorithm="CAS", n_robots=2, capacity=10, speed=0.1, ties="lowest_index",
+                  steps=1, trials=1)
+    for targets, shared in (("unseen", 1), ("shared", 0)):
+        totals = run_cell(both.replace(cas_targets=targets), world=(positions, par))["totals"][0]
+        assert (totals[k.T_DEPARTURES], totals[k.T_SHARED]) == (2, shared)
+
+
+def test_sf_sleep_updates_are_its_visits_split_at_half_time_and_absent_for_other_algorithms():
+    sf = Params(truth="logistic", algorithm="SF", n_robots=4, sigma_e=0.12, trials=3, steps=400)
+    m = measures(sf)
+    visits = simulate(sf)["summary"]["visits"]       # SF visits only its own location: one update each
+    assert (m["sf_updates_early"] + m["sf_updates_late"]).tolist() == visits.tolist()
+    assert (m["sf_updates_late"] > 0).all() and (m["sf_change_early"] >= m["sf_updates_early"] * 0).all()
+    assert (m["served"] == simulate(sf)["summary"]["served"]).all()
+    astc = measures(sf.replace(algorithm="ASTC"))
+    assert not astc["sf_updates_early"].any() and not astc["sf_change_late"].any()
+
+
+def test_foraging_is_item_delivery_with_the_items_carried_the_other_way():
+    """Section 3.3: serving a demand is foraging it. On one world, a foraging run counting items
+    when picked up and an item-delivery run are the same run: every robot's node, destination and
+    payload at every step, every location's count, and every total."""
+    rng = np.random.default_rng(7)
+    the_world = (np.vstack([HOME, rng.uniform(0.0, 1.0, (12, 2))]), np.concatenate([[0.0], rng.uniform(0.05, 0.8, 12)]))
+    for algorithm, options in (("R", {}), ("GR", {}), ("CAS", {}), ("CAS", {"cas_variant": "rate"}),
+                               ("GR", {"lam_hat_source": "mu"})):
+        fp = Params(algorithm=algorithm, n_robots=3, capacity=4, trials=3, steps=200, count_at="pickup", **options)
+        idp = fp.replace(mode="delivery", count_at="unload", mu_l=fp.lambda_mean, sigma_l=fp.lambda_sd)
+        a = run_cell(fp, world=the_world, trace=True)
+        b = run_cell(idp, world=the_world, trace=True)
+        for name in ("totals", "per_robot", "trace", "trace_counts"):
+            assert np.array_equal(a[name], b[name]), (algorithm, options, name)
+        assert a["totals"][:, k.T_SERVED].sum() > 0
+    # counted at unload instead, foraging loses what is on board at T: the same trajectory, fewer items
+    unload = run_cell(fp.replace(count_at="unload"), world=the_world, trace=True)
+    assert np.array_equal(unload["trace"], a["trace"])
+    assert (unload["totals"][:, k.T_SERVED] <= a["totals"][:, k.T_SERVED]).all()
+
+
+def test_theorem_1_random_robots_fill_up_more_surely_as_locations_multiply():
+    """Theorem 1: Bernoulli truth, R: the more locations, the fuller a robot comes home."""
+    per_trip = []
+    for locations in (5, 80):
+        s = simulate(Params(truth="bernoulli", algorithm="R", locations=locations, trials=5, steps=400))["summary"]
+        per_trip.append(s["served"].sum() / s["trips"].sum())
+    assert per_trip[0] < 0.6 * Params().capacity < 0.9 * Params().capacity < per_trip[1]
 
 
 def test_random_goes_home_when_full_and_otherwise_picks_another_location_uniformly():

@@ -36,13 +36,14 @@ def test_the_study_meets_the_figure_study_contract():
         assert hasattr(hook, name), name
     for name in ("run_together", "tidy", "draw", "check"):
         assert callable(getattr(hook, name))
-    assert hook.FIGURES == scenario.FIGURES == (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
+    assert hook.FIGURES == scenario.FIGURES == (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests",
+                                                "items-verdicts")
     assert reproduce.studies()["items"] is hook
-    assert set(hook.CHECK_CONFIGS) == set(hook.FIGURES) - {"items-fig01", "items-fig02"}
+    assert set(hook.CHECK_CONFIGS) == set(hook.FIGURES) - {"items-fig01", "items-fig02", "items-verdicts"}
     listing = reproduce.list_studies()
     assert [line.split(":")[0] for line in listing.splitlines() if not line.startswith(" ")] == [
         "delivery", "replenishment", "items", "lunar"]
-    assert "items-fig12 items-ttests" in listing
+    assert "items-fig12 items-ttests items-verdicts" in listing
 
 
 def test_the_sweep_files_are_the_grids_of_section_11():
@@ -63,9 +64,9 @@ def test_reproduce_items_fig04_quick_writes_its_table_and_files(quick_fig04):
     out, code = quick_fig04
     assert code == 0
     d = out / "quick" / "items-fig04"
-    for variant in ("max_expected", "rate"):
+    for name in ("items-fig04", "items-fig04-cas-rate"):  # the defaults (CAS max_expected), the other CAS rule
         for suffix in ("png", "pdf", "svg"):
-            assert (d / f"items-fig04-cas-{variant}.{suffix}").stat().st_size > 0
+            assert (d / f"{name}.{suffix}").stat().st_size > 0
     runs = pd.read_parquet(d / "runs.parquet")
     assert list(runs.columns) == ["experiment", *experiments.CONFIG_COLUMNS, *experiments.RESULT_COLUMNS]
     assert set(runs["capacity"]) == set(study.PANELS) and set(runs["n_robots"]) == set(study.QUICK_KEEP["n_robots"])

@@ -3,6 +3,7 @@ synthetic tables whose answers are known (the selected 30 are the top 30 by reso
 sds, R-T trips of both directions binned by entry time, the median run), every figure drawn from
 its tables, --check re-deriving them, and the figures in ``reproduce --list``."""
 
+import dataclasses
 import importlib
 import math
 import re
@@ -15,10 +16,12 @@ from pathlib import Path
 import lunar_synthetic as synthetic
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.compute
 import pytest
 
 from dronefleet import figstyle, reproduce
-from dronefleet.lunar import experiments, study
+from dronefleet.lunar import experiments, study, verdicts
 from dronefleet.lunar.params import LunarParams
 
 pytest.importorskip("matplotlib")
@@ -43,6 +46,10 @@ def _fake(patch):
     fake.simulate, fake.table_schemas = synthetic.simulate, real.table_schemas
     patch.setitem(sys.modules, "dronefleet.lunar.simulate", fake)
     patch.setattr(experiments, "grid_path", lambda experiment: Path(f"lunar-{experiment}.toml"))
+    # lunar-verdicts: E1-E3's conditions on each reading's configuration
+    patch.setattr(verdicts, "conditions", lambda base: [
+        dataclasses.replace(base, layout=layout, battery_wh=battery, eps=eps)
+        for layout, battery, eps in dict.fromkeys(c for e in ("e1", "e2", "e3") for c in CONDITIONS[e])])
 
 
 @pytest.fixture
@@ -329,7 +336,7 @@ def test_fig08_without_deaths_or_recharging_interruptions_is_written_drawn_and_c
     context = Context(tmp_path)
     study.run_together(context, ["lunar-fig08"])
     study.tidy(context, "lunar-fig08")
-    for name in study.MAY_BE_EMPTY:
+    for name in set(study.MAY_BE_EMPTY) & set(study.RAW["lunar-fig08"]):
         assert len(context.read_table("lunar-fig08", name)) == 0, name
     assert len(context.read_table("lunar-fig08", "robots")) > 0
     assert (tmp_path / "lunar-fig08" / "lunar-fig08.png") in study.draw(context, "lunar-fig08")
@@ -632,3 +639,42 @@ def test_an_e4_change_not_the_sweeps_is_refused_naming_it(synthetic_results):
     for call in (study.check, study.draw):
         with pytest.raises(SweepError, match=re.escape(f"{path}: change 'v0=9' is none of")):
             call(context, "lunar-e4")
+
+
+def test_the_verdicts_are_measured_from_seeded_runs_and_check_finds_a_changed_one(synthetic_results):
+    context, files = synthetic_results
+    assert "lunar-verdicts" in study.FIGURES and reproduce.owner("lunar-verdicts") is study
+    assert {path.name for path in files["lunar-verdicts"]} >= {"lunar-verdicts.png", "lunar-verdicts.svg"}
+    d = context.root / "lunar-verdicts"
+    # the runs are measured again by --check, not committed: the folder holds the verdicts alone
+    assert sorted(p.name for p in d.glob("*.parquet")) == ["verdicts.parquet"]
+    table = pd.read_parquet(d / "verdicts.parquet")
+    assert table["claim"].tolist() == list(verdicts.CLAIMS)
+    assert set(table["verdict_defaults"]) | set(table["verdict_thesis"]) <= set(verdicts.VERDICTS)
+    # the synthetic runs reach no late window: those claims are not measured, not a crash
+    assert "nothing to measure in these runs" in set(table["numbers_defaults"])
+    assert study.check(context, "lunar-verdicts") == []
+    changed = "holds" if table.loc[0, "verdict_thesis"] != "holds" else "does not hold"
+    committed = table.loc[0, "verdict_thesis"]
+    table.loc[0, "verdict_thesis"] = changed
+    table.to_parquet(d / "verdicts.parquet", index=False)
+    assert study.check(context, "lunar-verdicts") == [
+        f"lunar-verdicts verdicts row 0: verdict_thesis committed {changed!r}, re-derived {committed!r}"]
+
+
+def test_verdicts_check_runs_each_reading_again_and_finds_a_changed_run(synthetic_results, monkeypatch):
+    context, _ = synthetic_results
+    table = pd.read_parquet(context.root / "lunar-verdicts" / "verdicts.parquet")
+    simulate = sys.modules["dronefleet.lunar.simulate"].simulate
+
+    def more_resources(config):
+        tables = simulate(config)
+        summary = tables["summary"]
+        column = summary.schema.get_field_index("resources")
+        return {**tables, "summary": summary.set_column(column, "resources",
+                                                          pa.compute.add(summary["resources"], 7))}
+
+    monkeypatch.setattr(sys.modules["dronefleet.lunar.simulate"], "simulate", more_resources)
+    found = study.check(context, "lunar-verdicts")
+    changed = [row for row in range(len(table)) if any(f"row {row}: numbers_" in line for line in found)]
+    assert found and changed and all(line.startswith("lunar-verdicts verdicts row ") for line in found)

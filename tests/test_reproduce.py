@@ -186,9 +186,8 @@ def test_every_figure_of_every_study_has_its_experiments_script(tmp_path, monkey
     """``experiments/<figure>.py`` for each figure of ``reproduce --list``, a link to reproduce.py that
     reaches that figure: asked to redraw where no tables are, it is refused naming the figure."""
     scripts = ROOT / "experiments"
-    # besides, the lunar analyses of docs/lunar-readings.md and the checklist's verdicts (not figures)
-    assert sorted(p.stem for p in scripts.glob("*.py")) == sorted((*reproduce.FIGURES, "reproduce", "lunar-diagnosis",
-                                                                    "lunar-verdicts"))
+    # besides, the lunar analyses of docs/lunar-readings.md (not a figure)
+    assert sorted(p.stem for p in scripts.glob("*.py")) == sorted((*reproduce.FIGURES, "reproduce", "lunar-diagnosis"))
     for figure in reproduce.FIGURES:
         script = scripts / f"{figure}.py"
         assert script.resolve() == (scripts / "reproduce.py").resolve()

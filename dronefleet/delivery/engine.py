@@ -25,7 +25,7 @@ from numba import types
 
 from .auction import RULE_SIGNATURE, RULES, bid, reservation_wait
 from .energy import plan_attempt, soc_after_charging
-from ..fpmath import log
+from ..fpmath import exp, log
 from ..jit import borrowing, njit
 from .policy import decision, sgd_step
 from ..supervisor import take
@@ -62,11 +62,17 @@ NO_BID, BID_STEPPED, BID_SILENT = np.int8(0), np.int8(1), np.int8(2)
 # Values of Params.bids_on (auction.BIDS_ON).
 BIDS_ON_POLICY, BIDS_ON_SOC_THRESHOLD, BIDS_ON_ANY = 0, 1, 2
 
-# Safety margins of the tick skip (see _earliest_bid): far above rounding error, far below
+# Safety margins of the tick skip (see _bid_window): far above rounding error, far below
 # anything that matters in the model.
 F_MARGIN = 1e-9     # in decision-function units, relative
 SOC_MARGIN = 1e-12  # percent
 THRESHOLD_MARGIN = 1e-9  # relative, on 100 - SoC (see threshold_gap)
+# Relative, on instants in u = e^{k (t - base)} (see _bid_window): covers the rounding of exp and of
+# the divisions, and is still far below a tick (1e-9 / k seconds).
+U_MARGIN = 1e-9
+# The base time of u moves to the present once k (t - base) passes this: u stays far from
+# overflow (e^709) whatever the run's length.
+REBASE_EXPONENT = 256.0
 SCAN_TICKS = 128    # ticks looked ahead at once while someone may bid on some order
 # Ticks of a scan epoch: the bounds of the tick scan are computed (one exp per idle UAV) once per
 # epoch and hold for every window of SCAN_TICKS within it; longer epochs, looser bounds.
@@ -178,6 +184,9 @@ class Fleet(NamedTuple):
     scan_terms: np.ndarray
     scan_epoch: np.ndarray  # (2,) [start, end] s of the ticks scan_terms hold for; NaN: none yet
     bid_ids: np.ndarray     # int64 scratch of an auction: the UAVs it evaluates, ascending
+    # (100 - soc_ref) e^{k (t_ref - base)}: an idle UAV's SoC at u = e^{k (t - base)} is 100 - charge_a / u.
+    charge_a: np.ndarray
+    charge_base: np.ndarray  # (1,) the base time of u [s]
 
 
 class Attempts(NamedTuple):
@@ -319,7 +328,7 @@ def _score_to_beat(fleet, uavs, n, x_distance, x_mass, most):
 
 @borrowing
 def _become_idle(fleet, counters, params, i):
-    """UAV ``i`` has landed (and learned): it joins the packed idle set."""
+    """UAV ``i`` has landed (and learned) at ``fleet.t_ref[i]``: it joins the packed idle set."""
     n_idle = counters[N_IDLE]
     fleet.mode[i] = IDLE
     fleet.idle_ids[n_idle] = i
@@ -327,6 +336,9 @@ def _become_idle(fleet, counters, params, i):
     counters[N_IDLE] = n_idle + 1
     _scan_terms(fleet.scan_terms, n_idle, fleet.coef, fleet.intercept, fleet.soc_ref, fleet.t_ref,
                 fleet.scan_epoch, params, i)
+    t = fleet.t_ref[i]
+    _rebase(fleet, params, t)
+    fleet.charge_a[i] = (100.0 - fleet.soc_ref[i]) * exp(params.charge_rate * (t - fleet.charge_base[0]))
 
 
 @borrowing
@@ -547,51 +559,97 @@ def threshold_gap(theta):
 
 
 @borrowing(inline="always")
-def _earliest_bid(book, fleet, counters, params, t):
-    """A lower bound on when an idle UAV may first bid on a queued order, if nothing else happens.
+def _earliest_bid(fleet, counters, params):
+    """A lower bound on when an idle UAV's SoC may first reach theta (threshold rules), if nothing else happens.
 
-    Returns ``t`` if one may bid now and inf if none ever will. Idle UAVs only charge, so
-    their SoC only grows; a rule that bids on its policy (f >= 0) can bid on some order
-    once reach + b + w_soc x_soc >= 0, a threshold rule once SoC >= theta (in closed form to
-    within rounding, :func:`threshold_gap`, even for theta = 100). The time to a
-    SoC is the inverse of the charging curve. Margins (F_MARGIN, SOC_MARGIN) keep the
-    bound below the first tick at which the exact per-order test can succeed. With
-    reservations, a UAV whose f grows with SoC can bid (reserve) as soon as f > 0 at
-    SoC 100, and then at once, since it need not wait for the charge.
+    Idle UAVs only charge, so their SoC only grows; the crossing is the inverse of the charging
+    curve, in closed form to within rounding (:func:`threshold_gap`, even for theta = 100),
+    from the landing, not from the SoC now: near 100 % the computed SoC has too few significant
+    digits left in 100 - SoC.
     """
     earliest = np.inf
     theta_gap = threshold_gap(params.theta)
     for k in range(counters[N_IDLE]):
         i = fleet.idle_ids[k]
-        soc = soc_after_charging(fleet.soc_ref[i], t - fleet.t_ref[i], params.charge_rate)
-        if params.bids_on == BIDS_ON_SOC_THRESHOLD:
-            if soc >= params.theta:
-                return t
-            # From the landing, not from ``soc``: near 100 % the computed SoC has too few
-            # significant digits left in 100 - SoC.
-            earliest = min(earliest, fleet.t_ref[i]
-                           + log((100.0 - fleet.soc_ref[i]) / theta_gap) / params.charge_rate)
-            continue
+        earliest = min(earliest, fleet.t_ref[i] + log((100.0 - fleet.soc_ref[i]) / theta_gap) / params.charge_rate)
+    return earliest
+
+
+@borrowing(inline="always")
+def _bid_window(value, intercept, coef_soc, charge_a, params, open_u, close_u):
+    """``(open_u, close_u)`` widened by when an idle UAV may bid on an order (rules that bid on their policy).
+
+    ``value`` is the order's part of the UAV's decision value (:func:`_order_value`), ``coef_soc``
+    its SoC weight, ``charge_a`` its Fleet.charge_a. While charging, SoC = 100 - a / u with
+    u = e^{k (t - base)} and f is linear in SoC, so with s* the SoC at which f = 0 the UAV may
+    bid from u = a / (100 - s*) on if its SoC weight is positive (one division, no log), up to
+    that instant if it is negative (its window closes as it charges), always or never if zero.
+    The margins (F_MARGIN on f, SOC_MARGIN, U_MARGIN) make the window wider than any rounding
+    of the exact decision value at a tick: it only flags ticks, an auction decides. With
+    reservations a UAV whose f grows with SoC may bid (reserve) at once if s* < 100.
+    """
+    slack = value + intercept
+    margin = F_MARGIN * (1.0 + abs(value) + abs(intercept))
+    w_soc = coef_soc / params.soc_std
+    if w_soc == 0.0:
+        if slack >= -margin:
+            open_u = 0.0
+        return open_u, close_u
+    need = params.soc_mean + (-slack - margin) / w_soc
+    if w_soc > 0.0:
+        gap = 100.0 - need + SOC_MARGIN
+        if gap > 0.0:
+            open_u = min(open_u, 0.0 if params.reserves else charge_a / gap * (1.0 - U_MARGIN))
+        return open_u, close_u
+    gap = 100.0 - need - SOC_MARGIN
+    if gap > 0.0:
+        close_u = max(close_u, charge_a / gap * (1.0 + U_MARGIN))
+    else:  # below s* up to SoC 100: the window never closes (and a NaN weight lands here too)
+        open_u = 0.0
+    return open_u, close_u
+
+
+@borrowing
+def _rebase(fleet, params, t):
+    """Move the base time of u = e^{k (t - base)} to ``t`` once k (t - base) passes REBASE_EXPONENT.
+
+    Every Fleet.charge_a is scaled by e^{-k (t - base)}; each product rounds once, far within U_MARGIN.
+    """
+    base = fleet.charge_base[0]
+    if not params.charge_rate * (t - base) > REBASE_EXPONENT:
+        return
+    factor = exp(-params.charge_rate * (t - base))
+    for i in range(fleet.charge_a.shape[0]):
+        fleet.charge_a[i] *= factor
+    fleet.charge_base[0] = t
+
+
+@borrowing(inline="always")
+def _first_tick_anyone(book, fleet, counters, params, t_tick):
+    """A tick at or before the first one at which some idle UAV may bid on some queued order, if nothing
+    else happens (the next tick if one may bid now; NO_TICK if none ever will).
+
+    Each UAV's window for its best order (Fleet.reach, the largest order value over the queue)
+    holds every other order's: :func:`_bid_window` is monotone in the order value.
+    """
+    base = fleet.charge_base[0]
+    u = exp(params.charge_rate * (t_tick - base))
+    open_u = np.inf
+    close_u = 0.0
+    for k in range(counters[N_IDLE]):
+        i = fleet.idle_ids[k]
         if fleet.reach_stale[i]:
             fleet.reach[i] = _max_order_value(fleet.coef, i, book.queued_x, counters[QUEUE_LEN])
             fleet.reach_stale[i] = False
-        slack = fleet.reach[i] + fleet.intercept[i]
-        w_soc = fleet.coef[i, 2] / params.soc_std
-        margin = F_MARGIN * (1.0 + abs(fleet.reach[i]) + abs(fleet.intercept[i]))
-        if w_soc <= 0.0:
-            # Charging cannot make this UAV keener.
-            if slack + w_soc * (soc - params.soc_mean) >= -margin:
-                return t
-            continue
-        need = params.soc_mean + (-slack - margin) / w_soc
-        if params.reserves and need <= 100.0:  # it can reserve now, whatever its SoC
-            return t
-        if soc >= need:
-            return t
-        gap = 100.0 - need + SOC_MARGIN
-        if gap > 0.0:
-            earliest = min(earliest, t + log((100.0 - soc) / gap) / params.charge_rate)
-    return earliest
+        open_u, close_u = _bid_window(fleet.reach[i], fleet.intercept[i], fleet.coef[i, 2], fleet.charge_a[i],
+                                      params, open_u, close_u)
+        if open_u <= u or close_u >= u:
+            return counters[NEXT_TICK]
+    tick = counters[NEXT_TICK]
+    if not open_u < np.inf:
+        return NO_TICK
+    # One tick early: the log and the tick instant round.
+    return max(tick, first_tick_at_or_after(base + log(open_u) / params.charge_rate, params.advert_interval_s) - 1)
 
 
 @borrowing(inline="always")
@@ -652,8 +710,9 @@ def _first_possible_tick(book, fleet, counters, params, t_tick, end_max):
 def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     """Jump over ticks before ``t_other`` at which provably nobody bids; True if any were skipped.
 
-    Each skipped tick still advertises (the position moves on, cyclically) and counts
-    as an auction; nothing else happens at them.
+    ``t_other`` is the next event that changes the state (a UAV's, an order's arrival; a
+    sample changes nothing a bid depends on). Each skipped tick still advertises (the position
+    moves on, cyclically) and counts as an auction; nothing else happens at them.
     """
     interval = params.advert_interval_s
     # Ticks before t_other, and at or before t_stop, so that a paused run holds exactly
@@ -662,16 +721,25 @@ def _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop):
     if stop_end * interval == t_stop:
         stop_end += 1
     end = min(first_tick_at_or_after(t_other, interval), stop_end)
-    if counters[MAY_BID] == 0:
-        earliest = _earliest_bid(book, fleet, counters, params, t_tick) - interval
-        if earliest <= t_tick:
-            counters[MAY_BID] = 1
-        else:
-            end = min(end, first_tick_at_or_after(earliest, interval))
-    if counters[MAY_BID] == 1:
-        if params.bids_on != BIDS_ON_POLICY:
+    if params.bids_on == BIDS_ON_POLICY:
+        _rebase(fleet, params, t_tick)
+        if counters[MAY_BID] == 0:
+            start = _first_tick_anyone(book, fleet, counters, params, t_tick)
+            if start > counters[NEXT_TICK]:
+                end = min(end, start)
+            else:
+                counters[MAY_BID] = 1
+        if counters[MAY_BID] == 1:
+            end = _first_possible_tick(book, fleet, counters, params, t_tick, end)
+    else:
+        if counters[MAY_BID] == 0:
+            earliest = _earliest_bid(fleet, counters, params) - interval
+            if earliest <= t_tick:
+                counters[MAY_BID] = 1
+            else:
+                end = min(end, first_tick_at_or_after(earliest, interval))
+        if counters[MAY_BID] == 1:
             return False
-        end = _first_possible_tick(book, fleet, counters, params, t_tick, end)
     skipped = end - counters[NEXT_TICK]
     if skipped <= 0:
         return False
@@ -857,10 +925,10 @@ def _auction_uavs(fleet, counters, x_distance, x_mass, bounded):
     ids = fleet.bid_ids
     n_uavs = fleet.mode.shape[0]
     n = 0
-    if bounded and counters[N_IDLE] * SORT_FRACTION <= n_uavs:
+    if counters[N_IDLE] * SORT_FRACTION <= n_uavs:
         for k in range(counters[N_IDLE]):
             i = fleet.idle_ids[k]
-            if not fleet.quiet[i] or _may_bid(fleet.scan_terms, k, x_distance, x_mass):
+            if not bounded or not fleet.quiet[i] or _may_bid(fleet.scan_terms, k, x_distance, x_mass):
                 ids[n] = i
                 n += 1
         _sort(ids, n)
@@ -1019,8 +1087,10 @@ def advance(book, fleet, attempts, series, counters, params, table, rng, t_stop,
         advertising = counters[N_IDLE] > 0 and counters[QUEUE_LEN] > 0
         t_tick = tick * interval if advertising else np.inf
         t_other = min(t_uav, t_order, t_sample)
-        if (t_tick < t_other and params.bids_on != BIDS_ON_ANY
-                and _skip_ticks(book, fleet, counters, params, t_tick, t_other, t_stop)):
+        # A sample changes nothing a bid depends on: ticks are skipped past it (and the one at it).
+        t_change = min(t_uav, t_order)
+        if (t_tick < t_change and params.bids_on != BIDS_ON_ANY
+                and _skip_ticks(book, fleet, counters, params, t_tick, t_change, t_stop)):
             continue
         t = min(t_other, t_tick)
         if t != t or t_uav != t_uav:

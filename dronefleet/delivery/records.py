@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pyarrow as pa
 
+from ..contract import Column
 from ..records import arrow_array, arrow_table, write_tables
 from ..records import read_config as read_file_config
 from .config import SECONDS_PER_WEEK, Config, config_from_dict
@@ -73,6 +74,90 @@ SCHEMAS = {
                        attempts=_i64, aborted_attempts=_i64, aborted_pct=_f64, pending=_i64, backlog_age_s=_f64,
                        lost_uavs=_i64, auctions=_i64, decision_accuracy=_f64, reservations_won=_i64,
                        median_reservation_wait_s=_f64, forecast_met_pct=_f64),
+}
+
+_AT_T = "by the horizon"
+#: What every column of :data:`SCHEMAS` holds, with its unit (the documentation site's table pages).
+COLUMNS = {
+    "orders": {
+        "order_id": Column("index", "the order, numbered from 0 in order of arrival"),
+        "arrival_s": Column("s", "when the order arrived, from the start of the run"),
+        "arrival_week": Column("week", "the week it arrived in, 1 for the first"),
+        "distance_m": Column("m", "distance from the depot to the customer"),
+        "mass_kg": Column("kg", "mass of the parcel"),
+        "attempts": Column("count", "delivery attempts flown for it (takeoffs)"),
+        "winners": Column("index", "the UAVs that flew its attempts, in order"),
+        "delivered_s": Column("s", f"when its parcel reached the customer; null if not {_AT_T}"),
+        "delivery_time_s": Column("s", f"delivered_s - arrival_s; null if not delivered {_AT_T}"),
+    },
+    "attempts": {
+        "attempt_id": Column("index", "the attempt, numbered from 0 in order of takeoff"),
+        "uav": Column("index", "the UAV that flew it"),
+        "order_id": Column("index", "the order it carried"),
+        "takeoff_s": Column("s", "takeoff instant"),
+        "takeoff_soc": Column("%", "the UAV's state of charge at takeoff"),
+        "outcome": Column("", "delivered, aborted (the parcel turned back), lost (the UAV did not come back) "
+                              "or in_flight (still flying at the horizon)"),
+        "parcel_delivered": Column("", "whether the parcel reached the customer"),
+        "turn_s": Column("s", f"the instant of delivery or abort; null if neither happened {_AT_T}"),
+        "return_s": Column("s", f"the instant of landing or loss; null if neither happened {_AT_T}"),
+        "return_soc": Column("%", "state of charge at landing; null if it did not land"),
+        "allocated_s": Column("s", "when the UAV won the order's auction"),
+        "reserved": Column("", "whether it was won by a reservation bid (takeoff once charged)"),
+        "wait_s": Column("s", "takeoff_s - allocated_s: time from winning to takeoff"),
+        "forecast_wait_s": Column("s", "the wait the reservation bid forecast; null if not reserved"),
+        "forecast_met": Column("", "for a reserved attempt whose parcel has turned: whether it was delivered, as "
+                                   "forecast; null otherwise"),
+    },
+    "fleet": {
+        "week": Column("week", "the week that ended (the last row of a run: the horizon)"),
+        "t_s": Column("s", "the instant of the record"),
+        "uav": Column("index", "the UAV"),
+        "soh": Column("1", "its battery's state of health, the share of the nominal capacity it has "
+                           "(0.5..1 by default; unknown to the UAV)"),
+        "w_distance": Column("1", "its policy's weight on the standardised distance"),
+        "w_mass": Column("1", "its policy's weight on the standardised mass"),
+        "w_soc": Column("1", "its policy's weight on the standardised state of charge"),
+        "intercept": Column("1", "its policy's intercept (it bids where the weighted sum is >= 0)"),
+        "steps": Column("count", "learning steps its learner has taken"),
+        "soc": Column("%", "its state of charge; null once lost"),
+        "lost": Column("", "whether it was lost on a flight"),
+        "decision_accuracy": Column("1", "share of the run's 1000 test points where the policy bids exactly when "
+                                         "the UAV could fly the order (0..1)"),
+        "period": Column("count", "operating period: 1, or the saved fleet's plus one for a warm start"),
+    },
+    "timeseries": {
+        "t_s": Column("s", "the instant (every record_interval_s), after every event at it"),
+        "delivered": Column("count", "parcels delivered so far"),
+        "unallocated": Column("count", "orders waiting for a winner"),
+        "in_flight": Column("count", "UAVs flying"),
+        "aborted_attempts": Column("count", "attempts aborted so far"),
+        "idle": Column("count", "UAVs on the ground, free to bid"),
+        "lost": Column("count", "UAVs lost so far"),
+        "reserved": Column("count", "UAVs charging for a reserved takeoff"),
+    },
+    "summary": {
+        "seed": Column("", "the run's seed"),
+        "rule": Column("", "the winner rule of the auctions"),
+        "tau_minutes": Column("min", "mean time between two orders"),
+        "n_uavs": Column("count", "UAVs in the fleet"),
+        "horizon_weeks": Column("week", "length of the run"),
+        "period": Column("count", "operating period: 1, or the saved fleet's plus one for a warm start"),
+        "orders_arrived": Column("count", "orders that arrived"),
+        "delivered": Column("count", f"parcels delivered {_AT_T}"),
+        "median_delivery_time_s": Column("s", "median over the delivered orders of arrival to delivery; NaN if none"),
+        "attempts": Column("count", "delivery attempts (takeoffs)"),
+        "aborted_attempts": Column("count", "attempts whose parcel turned back"),
+        "aborted_pct": Column("%", "aborted attempts as a percentage of all attempts"),
+        "pending": Column("count", f"orders not delivered {_AT_T}"),
+        "backlog_age_s": Column("s", "summed age of the pending orders at the horizon"),
+        "lost_uavs": Column("count", "UAVs lost"),
+        "auctions": Column("count", "auctions held"),
+        "decision_accuracy": Column("1", "mean decision accuracy of the fleet's final policies (0..1)"),
+        "reservations_won": Column("count", "orders won by a reservation bid"),
+        "median_reservation_wait_s": Column("s", "median wait from winning a reservation to takeoff; NaN if none"),
+        "forecast_met_pct": Column("%", "reserved attempts delivered, of those whose parcel has turned; NaN if none"),
+    },
 }
 
 

@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     import pyarrow
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load", "resolve_key",
-           "replace", "value", "read_config", "table_schemas", "simulate", "outdated", "format_summary",
+           "replace", "value", "read_config", "table_schemas", "columns", "simulate", "outdated", "format_summary",
            "format_metrics", "describe", "label", "replay_data", "check_replayable"]
 
 NAME = "delivery"
@@ -83,6 +83,12 @@ def table_schemas() -> dict[str, pyarrow.Schema]:
     from .records import SCHEMAS
 
     return SCHEMAS
+
+
+def columns() -> dict:
+    from .records import COLUMNS
+
+    return COLUMNS
 
 
 def simulate(config: Config) -> dict[str, pyarrow.Table]:

@@ -154,7 +154,9 @@ def initial_state(config: Config, supervisor: str | os.PathLike | None = None, o
         reach=np.full(s, -np.inf), reach_stale=np.zeros(s, np.bool_), idle_ids=idle_ids,
         idle_pos=np.argsort(idle_ids).astype(np.int64), scan_terms=np.zeros((engine.N_SCAN_ROWS, s)),
         scan_epoch=np.full(2, np.nan),
-        bid_ids=np.zeros(s, np.int64))
+        bid_ids=np.zeros(s, np.int64),
+        # base time 0, where every UAV's t_ref is: e^0 = 1
+        charge_a=100.0 - soc.astype(np.float64), charge_base=np.zeros(1))
     n_samples = int(math.floor(config.horizon_s / config.record_interval_s)) + 1
     series = engine.Series(*(np.zeros(n_samples, np.int64) for _ in engine.Series._fields))
     counters = np.zeros(engine.N_COUNTERS, np.int64)

@@ -31,8 +31,9 @@ CAS_MAX_EXPECTED, CAS_RATE, CAS_GR_NO_EARMARK = 0, 1, 2
 
 # Integer options, float parameters: indices into ``opts`` and ``pars``.
 (O_MODE, O_TRUTH, O_ALG, O_CAS, O_GR_CAP_MAX, O_TIES_LOWEST, O_PRIVATE, O_OBS_REAL,
- O_COUNT_PICKUP, O_RESAMPLE, O_STEPS, O_CAPACITY, O_ROBOTS, O_DRAW_POSITIONS, O_DRAW_PARAMS) = range(15)
-N_OPTS = 15
+ O_COUNT_PICKUP, O_RESAMPLE, O_STEPS, O_CAPACITY, O_ROBOTS, O_DRAW_POSITIONS, O_DRAW_PARAMS,
+ O_CAS_SHARED) = range(16)
+N_OPTS = 16
 (P_SPEED, P_PV, P_KP, P_RATE, P_K, P_LG, P_SE, P_X0, P_MMIN,
  P_MEAN, P_SD, P_LOW, P_HIGH, P_OBS_RANGE) = range(14)
 N_PARS = 14
@@ -45,7 +46,11 @@ UNIT_BITS = 9007199254740992.0   # 2**53: a uniform is k / 2**53, k the top 53 b
 
 # Per-trial outputs (columns of ``totals``) and per-robot ones (last axis of ``per_robot``).
 T_GENERATED, T_SERVED, T_VISITS, T_TRIPS, T_PICKED = range(5)
-N_TOTALS = 5
+# Measures beyond the summary (the verdicts read them): departures to a location and those to a
+# location another robot is heading to or standing at (ASTC: two robots on one location, L393);
+# SF's sleep-time updates and the sum of |change| [steps] in each half of the run (L383).
+T_DEPARTURES, T_SHARED, T_SF_UPDATES_EARLY, T_SF_CHANGE_EARLY, T_SF_UPDATES_LATE, T_SF_CHANGE_LATE = range(5, 11)
+N_TOTALS = 11
 R_TRIPS, R_VISITS, R_ITEMS = range(3)
 N_PER_ROBOT = 3
 # Trace columns (per step and robot): node (-1 in transit), destination, steps left, payload y.
@@ -333,7 +338,12 @@ def decide_greedy(t, a, opts, pars, travel, seen, seen_at, earmark, yi, rng, str
     if predicted:
         for b in range(1, m + 1):
             value[b] = predict(truth, rate, big_k, growth, seen[b], seen_at[b], t + out[b])
-    if sweeper:
+    if sweeper and opts[O_CAS_SHARED]:
+        # option cas_shared_targets: the targets of the others, ear-marked as GR's, discount the count
+        for b in range(1, m + 1):
+            wanted = max(0.0, expected(predicted, value, seen, seen_at, rate, t, out, b) - earmark[b])
+            value[b] = wanted / max(1, out[b]) if variant == CAS_RATE else wanted
+    elif sweeper:
         if variant == CAS_RATE:
             for b in range(1, m + 1):            # b = a (0 steps) is never chosen
                 value[b] = expected(predicted, value, seen, seen_at, rate, t, out, b) / max(1, out[b])
@@ -533,7 +543,7 @@ def run_trial(opts, pars, seed, rng, world, generation, locations, robots, scrat
     big_k, growth, noise = pars[P_K], pars[P_LG], pars[P_SE]
     m_min, x0, reach = pars[P_MMIN], pars[P_X0], pars[P_OBS_RANGE]
     target = 0.5 * big_k + capacity
-    earmarking = algorithm == ALG_GR or algorithm == ALG_GRIC
+    earmarking = algorithm == ALG_GR or algorithm == ALG_GRIC or (algorithm == ALG_CAS and opts[O_CAS_SHARED] != 0)
     tracing = trace.shape[0] > 0
 
     for s in range(STREAM_ROBOT + n):
@@ -561,6 +571,7 @@ def run_trial(opts, pars, seed, rng, world, generation, locations, robots, scrat
     picked = 0
     removed = 0.0
     per_robot[:, :] = 0
+    totals[T_DEPARTURES:] = 0
     if algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF:
         assign_locations(min(n, m), rng, owner, assigned)
     spare, have = 0.0, False
@@ -601,7 +612,11 @@ def run_trial(opts, pars, seed, rng, world, generation, locations, robots, scrat
                     per_robot[i, R_VISITS] += 1
                 if truth == LOGISTIC and algorithm == ALG_SF and arrived[i] and a == assigned[i]:
                     stock = np.floor(population[a])
+                    before = sleep[i]
                     sleep[i] = max(0, int(np.floor(sleep[i] + pars[P_KP] * (target - stock) + 0.5)))
+                    half = T_SF_UPDATES_LATE if 2 * t > steps else T_SF_UPDATES_EARLY
+                    totals[half] += 1
+                    totals[half + 1] += abs(sleep[i] - before)
                 k, seen = take_at_location(truth, opts[O_OBS_REAL], a, capacity - y[i], m_min, count, population)
                 if truth == LOGISTIC:
                     removed += k
@@ -618,6 +633,10 @@ def run_trial(opts, pars, seed, rng, world, generation, locations, robots, scrat
             b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
                        assigned, owner, leave_at, rng, value, near_top)
             if b != STAY and b != a:
+                if b > 0:
+                    totals[T_DEPARTURES] += 1
+                    if heading_elsewhere(i, b, node, dest):
+                        totals[T_SHARED] += 1
                 if earmarking:
                     earmark_move(earmark, capacity, y[i], a, b)
                 node[i] = -1
@@ -639,6 +658,16 @@ def run_trial(opts, pars, seed, rng, world, generation, locations, robots, scrat
     totals[T_PICKED] = picked
     totals[T_VISITS] = per_robot[:, R_VISITS].sum()
     totals[T_TRIPS] = per_robot[:, R_TRIPS].sum()
+
+
+@njit(cache=True, error_model='numpy')
+def heading_elsewhere(i, b, node, dest):
+    """Whether a robot other than ``i`` stands at location ``b`` or is heading to it (``node``,
+    ``dest`` (n,)): robot i's departure to b is then to a shared target."""
+    for j in range(node.shape[0]):
+        if j != i and (node[j] == b or (node[j] < 0 and dest[j] == b)):
+            return True
+    return False
 
 
 @njit(cache=True, error_model='numpy')

@@ -89,6 +89,10 @@ KEYS: dict[str, Key] = {
                   "A1: GR caps y' with min(c, ...); max: the text's max(c, ...)"),
     "cas_variant": Key("options", "-", ("max_expected", "rate", "gr_no_earmark"), None, None, "max_expected",
                        "A2: CAS score: expected count, count per travel step, or GRIC without ear-marking"),
+    "cas_targets": Key("options", "-", ("unseen", "shared"), None, None, "unseen",
+                       "CAS ignores the others' destinations, or sees them in the shared world model and "
+                       "discounts each location by the room of the robots heading there, as GR's ear-marks "
+                       "(Liemhetcharat et al. 2015, Sections 6.2, 7.1.2)"),
     "ties": Key("options", "-", ("random", "lowest_index"), None, None, "random",
                 "A25: equal values go to the shorter trip, then a random one; or the lowest index"),
     "sharing": Key("options", "-", ("full", "destinations"), None, None, "full",
@@ -167,6 +171,10 @@ class Params:
         if self.sharing == "destinations" and not self.foraging:
             raise ParamsError('options.sharing = "destinations" is defined for mode "foraging" only (A26)',
                               ("sharing", "mode"))
+        if self.cas_targets == "shared" and self.cas_variant == "gr_no_earmark":
+            raise ParamsError('options.cas_targets = "shared" is not defined with cas_variant = "gr_no_earmark" '
+                              '(GRIC\'s rule with ear-marks is GRIC itself): use "max_expected" or "rate"',
+                              ("cas_targets", "cas_variant"))
         if self.foraging and self.locations < 1:
             raise ParamsError("world.locations must be >= 1", ("locations",))
         size = run_size(self)

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..config import SCENARIO_KEY, ConfigError, Sections, with_sources
 from ..console import counted
-from ..contract import Field
+from ..contract import Column, Field
 from .params import KEYS, Params, allowed, check
 from .simulate import robot_columns, summary_columns
 
@@ -48,12 +48,12 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
-           "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable", "study"]
+           "columns", "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable", "study"]
 
 NAME = "items"
 TABLES = ("summary", "robots")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.items.study`).
-FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
+FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests", "items-verdicts")
 SEED_KEY = "first_trial"
 SEEDS_REQUIRED = False
 
@@ -144,6 +144,37 @@ def table_schemas() -> dict[str, pyarrow.Schema]:
 
     return {table: pa.schema([(name, pa.float64() if name in _FLOATS else pa.int64()) for name in names])
             for table, names in (("summary", summary_columns()), ("robots", robot_columns()))}
+
+
+_TRIAL = Column("index", "the trial; trial k of root seed s draws its streams from s x 2^32 + k")
+#: What every column of :func:`table_schemas` holds, with its unit (the documentation site's table pages).
+COLUMNS = {
+    "summary": {
+        "trial": _TRIAL,
+        "seed": Column("", "the trial's own seed, root seed x 2^32 + trial"),
+        "generated": Column("items", "items (foraging) or demands (delivery) that appeared during the trial; "
+                                     "logistic foraging: the stock's net growth"),
+        "served": Column("items", "foraging: items brought home (or picked up, with count_at = \"pickup\"); "
+                                  "delivery: demands satisfied"),
+        "rate": Column("% (logistic: items)", "100 served / generated; under logistic foraging, where the stock "
+                                              "regrows, the items foraged"),
+        "picked": Column("items", "items taken at locations (foraging) or handed out (delivery)"),
+        "visits": Column("count", "arrivals of robots at locations"),
+        "trips": Column("count", "arrivals of robots at home"),
+        "items_per_trip": Column("items", "served / trips; NaN without a trip"),
+    },
+    "robots": {
+        "trial": _TRIAL,
+        "robot": Column("index", "the robot, from 0"),
+        "trips": Column("count", "its arrivals at home"),
+        "visits": Column("count", "its arrivals at locations"),
+        "items": Column("items", "its share of served"),
+    },
+}
+
+
+def columns() -> dict[str, dict[str, Column]]:
+    return COLUMNS
 
 
 def simulate(config: Config) -> dict[str, pyarrow.Table]:

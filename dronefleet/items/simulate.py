@@ -18,7 +18,7 @@ from . import kernel as k
 from .params import Params, grid_side
 
 __all__ = ["trial_seeds", "grid_positions", "kernel_inputs", "run_cell", "simulate", "summary_columns",
-           "robot_columns"]
+           "robot_columns", "measures", "MEASURES"]
 
 _MODES = {"foraging": k.MODE_FP, "delivery": k.MODE_IDP}
 _TRUTHS = {"bernoulli": k.BERNOULLI, "poisson": k.POISSON, "logistic": k.LOGISTIC}
@@ -66,6 +66,7 @@ def kernel_inputs(params: Params, world: tuple[np.ndarray, np.ndarray] | None = 
     opts[k.O_OBS_REAL] = p.obs == "real"
     opts[k.O_COUNT_PICKUP] = p.count_at == "pickup"
     opts[k.O_RESAMPLE] = p.truncation == "resample"
+    opts[k.O_CAS_SHARED] = p.cas_targets == "shared"
     opts[k.O_STEPS], opts[k.O_CAPACITY], opts[k.O_ROBOTS] = p.steps, p.capacity, p.n_robots
     opts[k.O_DRAW_POSITIONS] = p.foraging and world is None
     opts[k.O_DRAW_PARAMS] = world is None
@@ -151,3 +152,30 @@ def simulate(params: Params) -> dict[str, np.ndarray]:
               "trips": per_robot[:, :, k.R_TRIPS].reshape(-1), "visits": per_robot[:, :, k.R_VISITS].reshape(-1),
               "items": per_robot[:, :, k.R_ITEMS].reshape(-1)}
     return {"summary": summary, "robots": robots}
+
+
+#: The per-trial measures beyond the summary (:func:`measures`) and their kernel columns.
+MEASURES = {"departures": k.T_DEPARTURES, "shared_targets": k.T_SHARED,
+            "sf_updates_early": k.T_SF_UPDATES_EARLY, "sf_change_early": k.T_SF_CHANGE_EARLY,
+            "sf_updates_late": k.T_SF_UPDATES_LATE, "sf_change_late": k.T_SF_CHANGE_LATE}
+
+
+def measures(params: Params) -> dict[str, np.ndarray]:
+    """Per trial (int64 arrays, one value per trial): ``trial``, ``generated``, ``served``, ``trips``
+    (as in :func:`simulate`), and
+    the quantities the paper argues with but the summary does not hold:
+
+    - ``departures``: robots leaving a node for a location; ``shared_targets``: those whose
+      location another robot was heading to or standing at as they left (under ASTC, two robots
+      foraging one unassigned location at once: Liemhetcharat et al. 2015, Section 5.1.5);
+    - SF (Section 5.1.4: its sleep time "may fluctuate and not converge"): ``sf_updates_early``,
+      ``sf_updates_late``, the sleep-time updates in steps 1..T/2 and T/2+1..T, and
+      ``sf_change_early``, ``sf_change_late``, the sum of |change| of the sleep time [steps]
+      over them (0 for the other algorithms).
+    """
+    params.validate()
+    totals = run_cell(params)["totals"]
+    trial = np.arange(params.first_trial, params.first_trial + params.trials, dtype=np.int64)
+    return {"trial": trial, "generated": totals[:, k.T_GENERATED], "served": totals[:, k.T_SERVED],
+            "trips": totals[:, k.T_TRIPS],
+            **{name: totals[:, column] for name, column in MEASURES.items()}}

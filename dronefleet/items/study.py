@@ -1,4 +1,5 @@
-"""``dronefleet reproduce items-fig01..items-fig12 items-ttests``: the items study's tables, drawings and check.
+"""``dronefleet reproduce items-fig01..items-fig12 items-ttests items-verdicts``: the items study's tables,
+drawings and check.
 
 The scenario's ``study()`` hook (:class:`dronefleet.contract.FigureStudy`), run with the
 :class:`~dronefleet.contract.StudyContext` of ``dronefleet reproduce`` (it reads the sweep files,
@@ -7,11 +8,15 @@ E1-E5 are the sweep files ``configs/sweeps/items-<experiment>.toml``; E0 (Figs 1
 here. Each figure writes under ``<out>/<figure>/``: ``runs.parquet`` (one row per configuration
 and trial: :data:`~dronefleet.items.experiments.CONFIG_COLUMNS`, trial, seed, generated, served,
 rate; the slices of the experiments it draws), Figs 1-2 ``curve.parquet`` / ``paths.parquet``,
-the t-tests ``ttests.parquet``, then draws its files from those tables alone.
+the t-tests ``ttests.parquet``, then draws its files from those tables alone. ``items-verdicts``
+reads the other figures' tables (not their experiments) and writes ``extra.parquet`` (the extra
+cells it runs) and ``verdicts.parquet`` (:mod:`dronefleet.items.verdicts`).
 
 Options (spec A2, A9): CAS runs under ``cas_variant = "max_expected"`` and ``"rate"``, the
 item-delivery figures under ``lam_hat_source = "value"`` (lam_hat = 0.5) and ``"mu"``; every
-figure that depends on them is drawn once per option, the option in its file name and title.
+figure that depends on them is drawn once per option: ``<figure>.png`` under the defaults,
+``<figure>-<tag>.png`` under the others (the tag names the keys that differ, e.g. ``cas-rate``),
+the option in words in the legend.
 """
 
 from __future__ import annotations
@@ -23,13 +28,13 @@ import pandas as pd
 
 from ..config import SweepError
 from ..contract import StudyContext, check_configurations, check_experiments
-from . import experiments
+from . import experiments, verdicts
 from .experiments import CONFIG_COLUMNS, RESULT_COLUMNS, USES
 from .params import Params
 
-TITLE = ("multi-robot item delivery and foraging (Liemhetcharat et al. 2015), Figs 1-12 and the t-tests "
-         "(docs/items-model.md)")
-FIGURES = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests")
+TITLE = ("multi-robot item delivery and foraging (Liemhetcharat et al. 2015), Figs 1-12, the t-tests and a "
+         "verdict on each of the paper's statements (docs/items-model.md, docs/items-paper-checklist.md)")
+FIGURES = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests", "items-verdicts")
 #: --quick: every sweep with fewer trials and steps, and only these values of the grid's keys.
 QUICK_CHANGES = {"trials": 2, "steps": 200}
 QUICK_KEEP = {"n_robots": (1, 5), "capacity": (5, 10, 15, 20)}
@@ -62,6 +67,12 @@ TABLE_COLUMNS = {
     "ttests": {"experiment": "text", "capacity": "key", "option": "text", "a": "text", "b": "text",
                "pairs": "count", "mean_a": "number", "mean_b": "number", "mean_diff": "number",
                "t_paired": "number", "p_paired": "number", "t_unpaired": "number", "p_unpaired": "number"},
+    "verdicts": {"statement": "text", "verdict": "text", "holds_under": "text", "option": "text", "passes": "text",
+                 "numbers": "text"},
+    "extra": {"experiment": "text", **{c: "text" if c in ("mode", "truth", "algorithm", "cas_variant", "lam_hat_source",
+                                                          "cas_targets") else "key"
+                                       for c in verdicts.EXTRA_CONFIG},
+              **{c: "count" for c in verdicts.MEASURE_COLUMNS if c != "rate"}, "rate": "number"},
 }
 #: The configurations `--check` re-runs per figure (every trial), as column values; each is in --quick's grid.
 CHECK_CONFIGS = {
@@ -153,17 +164,23 @@ def select(runs: pd.DataFrame, option: dict) -> pd.DataFrame:
     return runs[mask].reset_index(drop=True)
 
 
+#: The options in words, for a figure's legend: key -> value -> words.
+OPTION_WORDS = {
+    "cas_variant": {"max_expected": "CAS scores the items expected", "rate": "CAS scores items per step travelled",
+                    "gr_no_earmark": "CAS as GRIC without ear-marking"},
+    "lam_hat_source": {"value": "robots assume 0.5 demands per step", "mu": "robots know the mean rate"},
+}
+
+
 def option_label(option: dict, delivery: bool) -> tuple[str, str]:
-    """(words for a title, a tag for a file name) of ``option``."""
-    words, tags = [], []
-    if "cas_variant" in option:
-        words.append(f'CAS cas_variant="{option["cas_variant"]}"')
-        tags.append(f"cas-{option['cas_variant']}")
-    if delivery and "lam_hat_source" in option:
-        words.append("lam_hat = 0.5 (A9 \"value\")" if option["lam_hat_source"] == "value"
-                     else "lam_hat = mu_l (A9 \"mu\")")
-        tags.append(f"lam-{option['lam_hat_source']}")
-    return ", ".join(words), "-".join(tags)
+    """(the option in words, for a legend; a tag for a file name: the keys whose value is not the
+    default, "" for the defaults) of ``option``. lam_hat_source counts in item delivery only."""
+    default = Params()
+    keys = [key for key in ("cas_variant", "lam_hat_source") if key in option
+            and (delivery or key != "lam_hat_source")]
+    words = ", ".join(OPTION_WORDS[key].get(option[key], f"{key} {option[key]}") for key in keys)
+    tag = "-".join(f"{key.split('_')[0]}-{option[key]}" for key in keys if option[key] != getattr(default, key))
+    return words, tag
 
 
 def ttest_table(runs: pd.DataFrame) -> pd.DataFrame:
@@ -191,9 +208,23 @@ def ttest_table(runs: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=list(TABLE_COLUMNS["ttests"]))
 
 
+def verdict_data(study: StudyContext, extra: pd.DataFrame) -> verdicts.Data:
+    """The committed tables the verdicts read (:data:`verdicts.FIGURE_TABLES`, the t-tests) and ``extra``."""
+    runs = {experiment: study.read_table(figure, "runs") for experiment, figure in verdicts.FIGURE_TABLES.items()}
+    return verdicts.Data(runs, study.read_table("items-ttests", "ttests"), extra)
+
+
 def tidy(study: StudyContext, figure: str) -> None:
     """Run (or take from this call's memo) the figure's experiments; write its tables."""
     d = study.figure_dir(figure)
+    if figure == "items-verdicts":
+        start = time.perf_counter()
+        extra = verdicts.extra_rows(verdicts.extra_configs(study.quick), study.map)
+        study.log(f"  items-verdicts: {extra['experiment'].nunique()} extra sets, {len(extra)} trials in "
+                  f"{time.perf_counter() - start:.1f} s")
+        study.write_table(extra, d / "extra.parquet")
+        study.write_table(verdicts.verdict_table(verdict_data(study, extra)), d / "verdicts.parquet")
+        return
     if figure in ("items-fig01", "items-fig02"):
         curve = experiments.logistic_curve()
         study.write_table(pd.DataFrame({"step": np.arange(len(curve)), "x": curve}), d / "curve.parquet")
@@ -210,19 +241,14 @@ def tidy(study: StudyContext, figure: str) -> None:
         study.write_table(ttest_table(runs), d / "ttests.parquet")
 
 
-#: The surfaces and slices: figure -> list of (file suffix, experiment, x, y or panel column, kind).
-DRAWINGS = {
-    "items-fig03": [("", None, "n_robots", "capacity", "surface")],
-    "items-fig05": [("", None, "n_robots", "capacity", "surface")],
-    "items-fig07": [("", None, "n_robots", "capacity", "surface")],
-    "items-fig09": [("a", "e4a", "n_robots", "capacity", "surface"), ("b", "e4b", "n_robots", "speed", "surface")],
-    "items-fig04": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig06": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig08": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig10": [("", None, "n_robots", "capacity", "slices")],
-    "items-fig11": [("", None, "n_robots", "speed", "slices")],
-    "items-fig12": [("", None, "mu_l", "n_robots", "slices")],
-}
+#: The 3-D figures: figure -> its rows (experiment or None: all, x, y); Fig 7 has a row per sigma_e.
+SURFACES = {"items-fig03": [(None, "n_robots", "capacity")], "items-fig05": [(None, "n_robots", "capacity")],
+            "items-fig07": [(None, "n_robots", "capacity")],
+            "items-fig09": [("e4a", "n_robots", "capacity"), ("e4b", "n_robots", "speed")]}
+#: The slices: figure -> (x, the column of its panels).
+SLICES = {"items-fig04": ("n_robots", "capacity"), "items-fig06": ("n_robots", "capacity"),
+          "items-fig08": ("n_robots", "capacity"), "items-fig10": ("n_robots", "capacity"),
+          "items-fig11": ("n_robots", "speed"), "items-fig12": ("mu_l", "n_robots")}
 
 
 #: The most configurations a figure's table may hold (items-fig07 holds 3,200).
@@ -253,23 +279,27 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     if figure == "items-fig02":
         return figures.logistic_paths(study.read_table(figure, "paths"), study.read_table(figure, "curve"),
                                       d / figure)
-    if figure == "items-ttests":
-        return figures.write_ttests(study.read_table(figure, "ttests"), d / figure)
+    if figure in ("items-ttests", "items-verdicts"):
+        return figures.write_ttests(study.read_table(figure, figure[6:]), d / figure)
     runs = read_runs(study, figure)
+    delivery = bool((runs["mode"] == "delivery").any())
     files = []
-    for suffix, experiment, x, second, kind in DRAWINGS[figure]:
-        mine = runs if experiment is None else runs[runs["experiment"] == experiment]
-        delivery = bool((mine["mode"] == "delivery").any())
-        for option in options(mine):
-            words, tag = option_label(option, delivery)
-            name = "-".join(part for part in (f"{figure}{suffix}", tag) if part)
-            chosen = select(mine, option)
-            if kind == "surface":
-                panel = "sigma_e" if figure == "items-fig07" else None
-                files += figures.surfaces(chosen, d / f"{name}-surface", x, second, panel, words)
-                files += figures.heatmaps(chosen, d / f"{name}-heatmap", x, second, panel, words)
+    for option in options(runs):
+        words, tag = option_label(option, delivery)
+        name = d / "-".join(part for part in (figure, tag) if part)
+        chosen = select(runs, option)
+        if figure in SLICES:
+            files += figures.slices(chosen, name, *SLICES[figure], words)
+            continue
+        blocks = []
+        for experiment, x, y in SURFACES[figure]:
+            mine = chosen if experiment is None else chosen[chosen["experiment"] == experiment]
+            if figure == "items-fig07":
+                blocks += [figures.Block(mine[mine["sigma_e"] == value], x, y, figures.panel_title("sigma_e", value))
+                           for value in sorted(mine["sigma_e"].unique())]
             else:
-                files += figures.slices(chosen, d / name, x, second, words)
+                blocks.append(figures.Block(mine, x, y))
+        files += figures.surfaces(blocks, name, words)
     return files
 
 
@@ -297,11 +327,14 @@ def check(study: StudyContext, figure: str) -> list[str]:
     Returns the differences, one line each.
     """
     d = study.root / figure
-    main = {"items-fig01": "curve", "items-fig02": "paths", "items-ttests": "ttests"}.get(figure, "runs")
+    main = {"items-fig01": "curve", "items-fig02": "paths", "items-ttests": "ttests",
+            "items-verdicts": "verdicts"}.get(figure, "runs")
     if not (d / f"{main}.parquet").exists():
         raise SweepError(f"{d / f'{main}.parquet'} is missing: run dronefleet reproduce {figure}"
                          f"{' --quick' if study.quick else ''} first (it writes the table that --check compares with)")
     differences = []
+    if figure == "items-verdicts":
+        return _check_verdicts(study, figure)
     if figure in ("items-fig01", "items-fig02"):
         differences += _differ(figure, "curve", "x", study.read_table(figure, "curve")["x"],
                                experiments.logistic_curve())
@@ -346,3 +379,41 @@ def check(study: StudyContext, figure: str) -> list[str]:
                 differences += _differ(figure, "ttests", column, table[column].to_numpy(), again[column].to_numpy())
     return differences
 
+
+
+#: The extra cells `--check` re-runs (every trial), as (extra set, {config key: value}).
+CHECK_EXTRA = (("e3-measures", {"algorithm": "SF", "n_robots": 5, "capacity": 10}),
+               ("e4a-shared", {"n_robots": 5, "capacity": 20}))
+
+
+def _check_verdicts(study: StudyContext, figure: str) -> list[str]:
+    """Re-run :data:`CHECK_EXTRA` against ``extra.parquet``, then re-derive every verdict from the
+    committed tables and compare ``verdicts.parquet`` value for value."""
+    extra = study.read_table(figure, "extra")
+    differences = []
+    configs = verdicts.extra_configs(study.quick)
+    for name, where in CHECK_EXTRA:
+        config = next((c for n, c in configs if n == name and all(getattr(c, k) == v for k, v in where.items())),
+                      None)
+        label = ",".join([name, *(f"{k}={v}" for k, v in where.items())])
+        if config is None:
+            raise SweepError(f"items-verdicts: the extra cell {label} is not among its cells"
+                             f"{' (--quick)' if study.quick else ''}")
+        fresh = verdicts.extra_rows([(name, config)])
+        mine = _where(extra, {"experiment": name, **where}).sort_values("trial")
+        if len(mine) != len(fresh):
+            differences.append(f"{figure} {label}: {len(mine)} trials committed, {len(fresh)} re-run")
+            continue
+        for column in verdicts.MEASURE_COLUMNS:
+            differences += _differ(figure, label, column, mine[column].to_numpy(), fresh[column].to_numpy(),
+                                   [f"trial {t}" for t in mine["trial"]])
+        study.log(f"  {label}: {len(mine) * len(verdicts.MEASURE_COLUMNS)} values re-run")
+    table = study.read_table(figure, "verdicts")
+    again = verdicts.verdict_table(verdict_data(study, extra))
+    if len(again) != len(table):
+        differences.append(f"{figure}: {len(table)} rows committed, {len(again)} re-derived")
+    else:
+        for column in TABLE_COLUMNS["verdicts"]:
+            differences += _differ(figure, "verdicts", column, table[column].to_numpy(), again[column].to_numpy())
+    study.log(f"{figure}: {'identical' if not differences else f'{len(differences)} values differ'}")
+    return differences

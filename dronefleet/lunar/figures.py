@@ -1,4 +1,4 @@
-"""The lunar study's figures (spec LUNAR-FORAGING.md section 15) from tidy tables alone.
+"""The lunar study's figures (Angyal 2024, Figs 6-3 to 6-11, and the control) from tidy tables alone.
 
 Each function reads the tables :mod:`dronefleet.lunar.study` writes (network snapshots, one row
 per robot; per-condition curves, one row per time) and draws one figure as PNG, PDF and SVG with

@@ -56,14 +56,14 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "RUN_LIMITS",
            "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config",
-           "run_size", "table_schemas", "simulate", "format_summary", "describe", "label", "replay_data",
+           "run_size", "table_schemas", "columns", "simulate", "format_summary", "describe", "label", "replay_data",
            "check_replayable", "study"]
 
 NAME = "lunar"
 TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "deaths", "recharge_triggers", "beacon_costs")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.lunar.study`).
 FIGURES: tuple[str, ...] = (*(f"lunar-fig{k:02d}" for k in (3, 4, 5, 6, 7, 8, 9, 11)), "lunar-control", "lunar-e4",
-                            "lunar-e5")
+                            "lunar-e5", "lunar-verdicts")
 SEED_KEY = "first_run"
 SEEDS_REQUIRED = False
 
@@ -150,6 +150,13 @@ def table_schemas() -> dict[str, pyarrow.Schema]:
     return schemas()
 
 
+def columns() -> dict:
+    """What every column of the tables holds (:data:`dronefleet.lunar.columns.COLUMNS`)."""
+    from .columns import COLUMNS
+
+    return COLUMNS
+
+
 def simulate(config: Config) -> dict[str, pyarrow.Table]:
     """Every run of ``config`` in one kernel call -> ``{table: pyarrow.Table}`` of :data:`TABLES`,
     each carrying the config in its metadata."""
@@ -226,7 +233,8 @@ def check_replayable(config: Config) -> None:
 
 
 def study() -> Any:
-    """Figs 6-3 to 6-11, the eps = 1 control, E4 and E5 in ``dronefleet reproduce``: :mod:`dronefleet.lunar.study`."""
+    """Figs 6-3 to 6-11, the eps = 1 control, E4, E5 and the claims' verdicts in ``dronefleet reproduce``:
+    :mod:`dronefleet.lunar.study`."""
     from . import study as figures
 
     return figures

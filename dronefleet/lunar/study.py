@@ -1,5 +1,5 @@
-"""``dronefleet reproduce lunar-fig03 .. lunar-fig11 lunar-control lunar-e4 lunar-e5``: the lunar study's tables,
-drawings and check.
+"""``dronefleet reproduce lunar-fig03 .. lunar-fig11 lunar-control lunar-e4 lunar-e5 lunar-verdicts``: the lunar
+study's tables, drawings and check.
 
 The scenario's ``study()`` hook (:class:`dronefleet.contract.FigureStudy`), run with the
 :class:`~dronefleet.contract.StudyContext` of ``dronefleet reproduce`` (it reads the sweep files,
@@ -7,7 +7,9 @@ runs on its processes, reads and writes the tables: this package sits below them
 (spec LUNAR-FORAGING.md section 14): E1-E3, E5 and the eps = 1 control are the sweep files
 ``configs/sweeps/lunar-<experiment>.toml`` (:data:`SOURCES`: which conditions each figure draws);
 E0 (Figs 6-3 to 6-6) is one SOFT-RT run with frames, :data:`E0`, defined here; E4 (the
-sensitivity, ``lunar-e4``: per-run summaries only) is :mod:`dronefleet.lunar.sensitivity`.
+sensitivity, ``lunar-e4``: per-run summaries only) is :mod:`dronefleet.lunar.sensitivity`; the
+verdicts of the thesis's claims (``lunar-verdicts``: E1-E3 under the defaults and the thesis
+reading) are :mod:`dronefleet.lunar.verdicts`.
 
 Each figure writes under ``<out>/<figure>/`` its raw tables, one row per run (``runs``: the
 summary, with :data:`~dronefleet.lunar.experiments.CONDITION_COLUMNS` and whether the run is
@@ -37,15 +39,16 @@ import pyarrow as pa
 
 from ..config import SweepError
 from ..contract import StudyContext, check_configurations, check_experiments
-from . import experiments, sensitivity
+from . import experiments, sensitivity, verdicts
 from .experiments import CURVE_METRICS, TRIP_METRICS
 from .simulate import table_schemas
 
 TITLE = ("beacon-guided foraging with recharging on the Moon (Angyal 2024), Figs 6-3 to 6-11, the eps = 1 "
-         "control, the sensitivity E4 and the Ch 4 baseline E5 (docs/guide/lunar.md)")
+         "control, the sensitivity E4, the Ch 4 baseline E5 and the verdicts of the thesis's claims "
+         "(docs/guide/lunar.md)")
 E0_FIGURES = ("lunar-fig03", "lunar-fig04", "lunar-fig05", "lunar-fig06")
 FIGURES = (*E0_FIGURES, "lunar-fig07", "lunar-fig08", "lunar-fig09", "lunar-fig11", "lunar-control",
-           sensitivity.FIGURE, "lunar-e5")
+           sensitivity.FIGURE, "lunar-e5", verdicts.FIGURE)
 #: --quick: every condition with fewer, shorter runs (E0 shorter).
 QUICK_CHANGES = {"runs": 5, "duration_s": 600.0}
 QUICK = (f"{QUICK_CHANGES['runs']} runs of {QUICK_CHANGES['duration_s']:g} s per condition "
@@ -89,7 +92,8 @@ ALIGNMENT_METRICS = ("alignment_T", "alignment_N", "alignment_R")
 RAW = {**dict.fromkeys(E0_FIGURES, ("runs", "snapshots")), "lunar-fig07": ("runs", "timeseries"),
        "lunar-fig08": ("runs", "trips", *experiments.RECORDS), "lunar-fig09": ("runs", "snapshots"),
        "lunar-fig11": ("runs", "timeseries"), "lunar-control": ("runs", "timeseries"),
-       "lunar-e5": ("runs", "timeseries"), sensitivity.FIGURE: ("runs_by_change",)}
+       "lunar-e5": ("runs", "timeseries"), sensitivity.FIGURE: ("runs_by_change",),
+       verdicts.FIGURE: ()}
 #: Runs ``--check`` simulates again per figure (E1-E3: the best and the last of the first condition of
 #: the table, and the best of the last; E0: its run).
 CHECK_RUNS = 3
@@ -131,13 +135,16 @@ TABLE_COLUMNS = {
     "runs_by_change": {"change": "text", **_RUNS},
     "effects": {"change": "text", "condition": "text", "metric": "text", "default_mean": "number", "mean": "number",
                 "effect": "number", "se": "number", "runs": "count"},
+    "verdicts": {"claim": "text", **{f"{what}_{reading}": "text" for reading in verdicts.READINGS
+                                     for what in ("verdict", "numbers")}},
 }
 #: The tables that may hold no rows: runs without deaths or recharging interruptions (--quick's short runs).
 MAY_BE_EMPTY = ("deaths", "recharge_triggers")
 #: The derived tables of each figure.
 DERIVED = {"lunar-fig05": ("highlighted",), "lunar-fig06": ("highlighted",), "lunar-fig07": ("curves", "stats"),
            "lunar-fig08": ("bins",), "lunar-fig09": ("median",), "lunar-fig11": ("curves",),
-           "lunar-control": ("curves", "stats"), "lunar-e5": ("curves", "stats"), sensitivity.FIGURE: ("effects",)}
+           "lunar-control": ("curves", "stats"), "lunar-e5": ("curves", "stats"), sensitivity.FIGURE: ("effects",),
+           verdicts.FIGURE: ("verdicts",)}
 
 
 def _with_v0(frame: pd.DataFrame, configs: dict) -> pd.DataFrame:
@@ -268,6 +275,8 @@ def tidy(study: StudyContext, figure: str) -> None:
     """Run (or take from this call's memo) the figure's experiments; write its raw and derived tables."""
     if figure == sensitivity.FIGURE:
         return sensitivity.tidy(study, grid(study, "e4"))
+    if figure == verdicts.FIGURE:
+        return verdicts.tidy(study, _reading_configs(study))
     d = study.figure_dir(figure)
     if figure in E0_FIGURES:
         tables = experiment_tables(study, "e0")
@@ -330,6 +339,8 @@ def draw(study: StudyContext, figure: str) -> list[Path]:
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
     if figure == sensitivity.FIGURE:
         return sensitivity.draw(tables, d / figure)
+    if figure == verdicts.FIGURE:
+        return verdicts.draw(tables["verdicts"], d / figure)
     if figure in E0_FIGURES:
         snapshots = tables["snapshots"]
         geometry, v0 = _geometry(snapshots if len(snapshots) else tables["runs"]), float(tables["runs"]["v0"].iloc[0])
@@ -426,13 +437,15 @@ def check(study: StudyContext, figure: str) -> list[str]:
     """Derive the figure's derived tables again from its raw ones, and simulate :data:`CHECK_RUNS`
     of its runs again; compare every value with the committed tables. The differences, one line each."""
     d = study.root / figure
-    raw = d / f"{RAW[figure][0]}.parquet"
+    raw = d / f"{(RAW[figure] or DERIVED[figure])[0]}.parquet"
     if not raw.exists():
         raise SweepError(f"{raw} is missing: run dronefleet reproduce {figure}"
                          f"{' --quick' if study.quick else ''} first (it writes the table that --check compares with)")
     tables = read_tables(study, figure, RAW[figure] + DERIVED.get(figure, ()))
     if figure == sensitivity.FIGURE:
         return _check_e4(study, tables)
+    if figure == verdicts.FIGURE:
+        return _check_verdicts(study, tables)
     runs = tables["runs"]
     differences = _differ(figure, "runs", runs[["selected"]],
                           pd.DataFrame({"selected": experiments.selected(runs).to_numpy()}))
@@ -478,6 +491,19 @@ def _check_e4(study: StudyContext, tables: dict[str, pd.DataFrame]) -> list[str]
         differences += found
     return differences
 
+
+def _reading_configs(study: StudyContext) -> dict[str, list]:
+    """lunar-verdicts' configurations per reading (with --quick: :data:`QUICK_CHANGES`)."""
+    return verdicts.reading_configs(QUICK_CHANGES if study.quick else None)
+
+
+def _check_verdicts(study: StudyContext, tables: dict[str, pd.DataFrame]) -> list[str]:
+    """lunar-verdicts' --check: E1-E3 run again under each reading, their verdicts and numbers
+    compared with the committed ones."""
+    figure = verdicts.FIGURE
+    differences = _differ(figure, "verdicts", tables["verdicts"], verdicts.measure(study, _reading_configs(study)))
+    study.log(f"{figure}: verdicts {'identical' if not differences else f'{len(differences)} values differ'}")
+    return differences
 
 def _check_snapshots(study: StudyContext, figure: str, tables: dict[str, pd.DataFrame]) -> list[str]:
     """The snapshot rows of each run of the figure's snapshots table, simulated again."""

@@ -6,7 +6,8 @@ tables the claims read (``summary``, ``timeseries``, ``trips`` (every trip), ``s
 (without frames), ``robots``, ``recharge_triggers``), each with a ``condition`` column
 (:func:`~dronefleet.lunar.experiments.condition_of`: ``SOFT-RT``, ``SOFT-RT 7.5 Wh``, ...), and
 each condition's configuration. E0 is run 0 of E1's SOFT-RT: the same run as the study's E0
-(its frames only add snapshots).
+(its frames only add snapshots). The tables keep only the columns the claims read (:data:`KEPT`):
+all nine conditions' trips and snapshots would otherwise be tens of megabytes a reading.
 
 Each claim id maps in :data:`CLAIMS` to a function ``f(runs) -> (verdict, numbers)``: verdict
 one of :data:`VERDICTS`, numbers a short text of what was measured. The rules are the
@@ -15,6 +16,13 @@ checklist's: comparisons between conditions pair the per-run values by run index
 two means' average; a test on the selected runs (the 30 of 50 with most resources) says so.
 :func:`verdict_table` applies every claim to the runs of two configurations. A difference of the
 wrong sign does not hold, however small (the checklist's "direction only" needs the thesis's sign).
+A claim whose runs hold nothing to measure it on (``--quick``'s short runs: no late window) is
+not measured.
+
+``dronefleet reproduce lunar-verdicts`` (:data:`FIGURE`) runs E1-E3 under each reading of
+:data:`READINGS` and writes ``verdicts`` (:func:`measure`), drawn as a grid (:func:`draw`). The runs
+are seeded, so ``--check`` runs them again and compares every verdict and number; their tables
+(about 25 MB a reading) are not committed.
 
 Where a measurement departs from the checklist's wording, for lack of a recorded quantity:
 
@@ -34,24 +42,41 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import logging
 import math
+import os
+import time
 from collections.abc import Callable, Iterable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from ..config import read_toml
+from ..pairs import paired
 from . import experiments as ex
 from .layout import build
 
 __all__ = ["VERDICTS", "CLAIMS", "Runs", "conditions", "experiment_runs", "paired", "verdict_table",
-           "HOLDS", "DIRECTION", "FAILS", "NOT_MEASURED"]
+           "HOLDS", "DIRECTION", "FAILS", "NOT_MEASURED", "FIGURE", "READINGS", "reading_configs", "measure",
+           "tidy", "draw"]
+
+logger = logging.getLogger(__name__)
 
 HOLDS, DIRECTION, FAILS, NOT_MEASURED = "holds", "direction only", "does not hold", "not measured"
 VERDICTS = (HOLDS, DIRECTION, FAILS, NOT_MEASURED)
 #: The tables the claims read.
 TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "recharge_triggers")
+#: The columns the claims read of the larger tables (the others are kept whole).
+KEPT = {"timeseries": ("run", "t", "resources", "sessions", "rate", "n_mobile", "n_beacons", "n_unspawned",
+                       "soc_sum", "soc_beacons", "soc_mobile", "alignment_T", "alignment_N", "alignment_R"),
+        "trips": ("run", "origin", "dest", "tick_entered", "length_m", "energy_wh", "soc_cost", "duration_s",
+                  "soft_length_m"),
+        "snapshots": ("run", "label", "t", "robot", "status", "role", "x", "y", "load",
+                      *(f"{axis}_{key}" for axis in ("vx", "vy") for key in "TNR")),
+        "robots": ("run", "robot", "unloads"),
+        "recharge_triggers": ("run", "robot", "t", "soc")}
 #: The experiments whose conditions the claims read (their sweep files).
 SWEEPS = ("e1", "e2", "e3")
 #: The checklist's windows [s]: early, late, steady phase, and the two halves of the late run.
@@ -104,13 +129,18 @@ def _tables_of(config: Any) -> dict[str, pd.DataFrame]:
     from .simulate import simulate
 
     tables = simulate(config)
-    return {name: tables[name].to_pandas() for name in TABLES}
+    return {name: tables[name].select(list(KEPT.get(name, tables[name].column_names))).to_pandas()
+            for name in TABLES}
 
 
-def experiment_runs(base: Any, outcomes: Callable | None = None) -> Runs:
-    """Run E1-E3 on ``base`` (:func:`conditions`, in chunks of :data:`experiments.CHUNK_RUNS`
-    runs); ``outcomes(function, items)`` as :func:`experiments.run_configs` takes it (None: here)."""
-    configs = conditions(base)
+def _named(configs: Iterable[Any]) -> dict[str, Any]:
+    """``configs`` by their condition's words."""
+    return {ex.condition_of(c.layout, c.battery_wh, c.eps, c.model): c for c in configs}
+
+
+def experiment_runs(configs: list[Any], outcomes: Callable | None = None) -> Runs:
+    """Run ``configs`` (:func:`conditions`: one per condition) in chunks of :data:`experiments.CHUNK_RUNS`
+    runs; ``outcomes(function, items)`` as :func:`experiments.run_configs` takes it (None: here)."""
     each = outcomes or (lambda function, items: ((item, function(item), None) for item in items))
     todo = [chunk for config in configs for chunk in ex.chunks(config)]
     done = {}
@@ -118,7 +148,7 @@ def experiment_runs(base: Any, outcomes: Callable | None = None) -> Runs:
         if error is not None:
             raise error
         done[chunk] = result
-    named = {ex.condition_of(c.layout, c.battery_wh, c.eps, c.model): c for c in configs}
+    named = _named(configs)
     tables = {}
     for name in TABLES:
         tables[name] = pd.concat([done[chunk][name].assign(condition=condition)
@@ -128,15 +158,6 @@ def experiment_runs(base: Any, outcomes: Callable | None = None) -> Runs:
 
 
 # ---------------------------------------------------------------- the rules of a verdict
-
-
-def paired(a: pd.Series, b: pd.Series) -> tuple[float, float, int]:
-    """(mean, standard error, n) of ``a - b`` over the runs (index) both hold a value for."""
-    d = (a - b).dropna()
-    n = len(d)
-    if n == 0:
-        return math.nan, math.nan, 0
-    return float(d.mean()), float(d.std(ddof=1) / math.sqrt(n)) if n > 1 else math.inf, n
 
 
 def sign_verdict(mean: float, se: float) -> str:
@@ -844,8 +865,18 @@ CLAIMS: dict[str, Callable[[Runs], tuple[str, str]]] = {
 
 def verdicts(runs: Runs) -> pd.DataFrame:
     """Every claim of :data:`CLAIMS` on ``runs``: ``claim``, ``verdict``, ``numbers``."""
-    rows = [(claim, *function(runs)) for claim, function in CLAIMS.items()]
+    rows = [(claim, *_measured(function, runs)) for claim, function in CLAIMS.items()]
     return pd.DataFrame(rows, columns=["claim", "verdict", "numbers"])
+
+
+def _measured(function: Callable[[Runs], tuple[str, str]], runs: Runs) -> tuple[str, str]:
+    """``function(runs)``, or not measured where the runs hold nothing to measure it on (a window
+    the runs do not reach, so an empty table of the wrong type: ``--quick``'s short runs)."""
+    try:
+        return function(runs)
+    except (ValueError, IndexError, KeyError, TypeError, ZeroDivisionError, np.linalg.LinAlgError) as error:
+        logger.debug("claim not measured: %s", error)
+        return NOT_MEASURED, "nothing to measure in these runs"
 
 
 def verdict_table(defaults: Runs, thesis: Runs) -> pd.DataFrame:
@@ -854,3 +885,88 @@ def verdict_table(defaults: Runs, thesis: Runs) -> pd.DataFrame:
     a, b = verdicts(defaults), verdicts(thesis)
     return pd.DataFrame({"claim": a["claim"], "verdict_defaults": a["verdict"], "numbers_defaults": a["numbers"],
                          "verdict_thesis": b["verdict"], "numbers_thesis": b["numbers"]})
+
+
+# ---------------------------------------------------------------- the figure lunar-verdicts (dronefleet reproduce)
+
+FIGURE = "lunar-verdicts"
+#: The readings: the configuration each runs E1-E3 on (a file of configs/), and the figure's words for it.
+READINGS = {"defaults": "lunar.toml", "thesis": "lunar-thesis.toml"}
+READING_WORDS = {"defaults": "defaults", "thesis": "thesis reading"}
+#: The thesis's sections (the checklist's): their words and their first and last claim.
+SECTIONS = {"6-2 the system\nin one run": (1, 17), "6-3-1 sustained\nforaging": (18, 38),
+            "6-3-2 self-organizing\nand optimization": (39, 57), "6-3-3 adaptability\nto the environment": (58, 70)}
+#: The colour of each verdict (:data:`VERDICTS`' order).
+VERDICT_COLOURS = ("#1b7837", "#a6dba0", "#c2185b", "#d9d9d9")
+
+
+def reading_configs(changes: dict | None = None) -> dict[str, list[Any]]:
+    """Each reading's configurations of E1-E3 (:func:`conditions` on its configuration file), with
+    ``changes`` (``--quick``'s) applied."""
+    return {reading: [dataclasses.replace(config, **(changes or {})) for config in conditions(_config_file(path))]
+            for reading, path in READINGS.items()}
+
+
+def _config_file(name: str) -> Any:
+    """The LunarParams of the shipped config file ``name``: the defaults updated by its sections' keys,
+    checked (read here, not by :func:`dronefleet.lunar.scenario.load`, whose study hook imports this module)."""
+    from ..config import shipped_config
+    from .keys import checked
+    from .params import LunarParams
+
+    _, document = read_toml(shipped_config(name), "config file")
+    keys = {key: value for section in document.values() if isinstance(section, dict) for key, value in section.items()}
+    return checked({**{f.name: getattr(LunarParams(), f.name) for f in dataclasses.fields(LunarParams)}, **keys})
+
+
+def measure(study, configs: dict[str, list[Any]]) -> pd.DataFrame:
+    """Run E1-E3 under each reading (``configs``: :func:`reading_configs`) on ``study``'s processes
+    and return their :func:`verdict_table`. The runs are seeded, so ``--check`` measures again and
+    compares the verdicts and numbers (about 80 CPU s a reading); their tables are not kept
+    (about 25 MB a reading)."""
+    runs = []
+    for reading, mine in configs.items():
+        start = time.perf_counter()
+        runs.append(experiment_runs(mine, study.map))
+        study.log(f"  verdicts, {READING_WORDS[reading]}: E1-E3, {len(mine)} conditions; "
+                  f"{time.perf_counter() - start:.1f} s")
+    return verdict_table(*runs)
+
+
+def tidy(study, configs: dict[str, list[Any]]) -> None:
+    """Write ``verdicts`` (:func:`measure`) into the figure's folder."""
+    study.write_table(measure(study, configs), study.figure_dir(FIGURE) / "verdicts.parquet")
+
+
+def draw(table: pd.DataFrame, path: str | os.PathLike) -> list[Path]:
+    """The verdicts as a grid: a panel per thesis section (:data:`SECTIONS`), a row per claim, a
+    column per reading, each cell coloured by its verdict."""
+    from ..figstyle import DOUBLE_COLUMN, MIN_FONT_SIZE, PRINT_RC, _figure, figure_paths, letter_panels
+
+    number = table["claim"].str[1:].astype(int)
+    sections = {title: table[(number >= first) & (number <= last)] for title, (first, last) in SECTIONS.items()}
+    tallest = max(len(rows) for rows in sections.values())
+    with _figure(path, (DOUBLE_COLUMN, 0.14 * tallest + 1.8), PRINT_RC, ncols=len(sections),
+                 squeeze=False) as (mpl, fig, axes):
+        colours = mpl.colors.ListedColormap(VERDICT_COLOURS)
+        for ax, (title, rows) in zip(axes[0], sections.items()):
+            cells = np.array([[VERDICTS.index(v) for v in rows[f"verdict_{reading}"]] for reading in READINGS],
+                             dtype=float).T.reshape(-1, len(READINGS))
+            ax.imshow(cells, cmap=colours, vmin=-0.5, vmax=len(VERDICTS) - 0.5, aspect="auto",
+                      interpolation="nearest")
+            ax.set_ylim(tallest - 0.5, -0.5)   # cells of one height in every panel
+            ax.set_yticks(range(len(rows)), rows["claim"].tolist())
+            ax.set_xticks(range(len(READINGS)), [READING_WORDS[r].replace(" ", "\n") for r in READINGS])
+            ax.set_xticks(np.arange(len(READINGS) + 1) - 0.5, minor=True)
+            ax.set_yticks(np.arange(len(rows) + 1) - 0.5, minor=True)
+            ax.grid(which="minor", color="white", lw=0.8)
+            ax.tick_params(which="both", labelsize=MIN_FONT_SIZE, length=0, top=False, labeltop=True,
+                           bottom=False, labelbottom=False)
+            for side in ax.spines.values():
+                side.set_visible(False)
+            ax.set_title(title, fontsize=MIN_FONT_SIZE + 1)
+        letter_panels(axes.flat)
+        handles = [mpl.patches.Patch(color=colour, label=verdict) for verdict, colour in zip(VERDICTS, VERDICT_COLOURS)]
+        fig.legend(handles=handles, loc="outside lower center", ncols=len(VERDICTS), frameon=False,
+                   title="verdict of each thesis claim (docs/lunar-thesis-checklist.md) from the runs of E1-E3")
+    return figure_paths(path)

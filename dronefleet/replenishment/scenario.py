@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..console import counted
+from ..contract import Column
 from .bounds import (COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds,
                      fixed_work_ceiling)
 from .config import (DEFAULTS, NAME, SCHEMA, Config, config_from_dict, describe, label, load,
@@ -57,7 +58,7 @@ if TYPE_CHECKING:
 
 __all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "Config", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
-           "simulate", "format_summary", "describe", "label", "format_bounds", "replay_data", "study"]
+           "columns", "simulate", "format_summary", "describe", "label", "format_bounds", "replay_data", "study"]
 
 TABLES = ("summary", "timeseries")
 #: Figures of ``dronefleet reproduce`` drawn from this scenario (fig09..fig12 come with
@@ -81,6 +82,43 @@ def table_schemas() -> dict[str, pyarrow.Schema]:
                               for name in names])
             for table, names in (("summary", summary_columns()),
                                  ("timeseries", ("trial", "tick", *phases, "stored_energy", "work")))}
+
+
+_TRIAL = {"trial": Column("index", "the trial, numbered from 1; trial k draws from seed 876 k")}
+_PHASE_DOCS = {"workers": {"charging": "charging in the base or from a mobile charger",
+                           "to_work": "driving to the work area", "working": "working in the work area",
+                           "to_charge": "driving back to be charged"},
+               "chargers": {"charging": "charging in the base", "to_transfer": "driving to the transfer area",
+                            "sharing": "handing energy to a worker", "to_base": "driving back to the base"}}
+#: What every column of :func:`table_schemas` holds, with its unit (the documentation site's table pages).
+COLUMNS = {
+    "summary": {
+        **_TRIAL,
+        "seed": Column("", "the seed of the trial's random streams (876 x trial)"),
+        "work": Column("points", "work done: one point per worker and tick spent working in the work area"),
+        "energy": Column("energy units", "total energy consumed by all robots, workers and mobile chargers"),
+        "work_energy": Column("energy units", "the energy the workers spent working"),
+        "efficiency": Column("1", "work_energy / energy"),
+        "efficiency_with_loss": Column("1", "work_energy / (energy + lost): the energy lost in transfer counted as "
+                                            "spent"),
+        "depleted_workers": Column("count", "workers whose battery ran empty during the trial"),
+        "depleted_chargers": Column("count", "mobile chargers whose battery ran empty during the trial"),
+        "shared": Column("energy units", "energy the mobile chargers handed to workers"),
+        "lost": Column("energy units", "energy lost in those transfers (the share transfer_loss of what was drawn)"),
+    },
+    "timeseries": {
+        **_TRIAL,
+        "tick": Column("tick", "the tick of the sample (every sample_every ticks)"),
+        **{f"{role}_{phase}": Column("count", f"{role} {doc}") for role, phases in _PHASE_DOCS.items()
+           for phase, doc in phases.items()},
+        "stored_energy": Column("energy units", "energy stored in all robots' batteries"),
+        "work": Column("points", "work done so far"),
+    },
+}
+
+
+def columns() -> dict[str, dict[str, Column]]:
+    return COLUMNS
 
 
 def simulate(config: Config) -> dict[str, pyarrow.Table]:

@@ -12,9 +12,10 @@ None (the paper's delivery scenario), a registered scenario's name (its defaults
 or the path of a TOML config file. Changes are config keys, bare
 (``tau_minutes=20``, ``rule="random"``) or, in the ``set`` dict, also as ``section.key``
 (``set={"auction.rule": "random"}``); values have the types of a config file (an int is
-taken for a float, never the reverse). ``seed`` / ``seeds`` set the scenario's seed key
-(delivery ``seed``; replenishment ``first_trial``: a run holds trials ``first_trial`` ..
-``first_trial + trials - 1``). Bad arguments raise :class:`dronefleet.config.ConfigError`
+taken for a float, never the reverse). ``seed`` / ``seeds`` set the root seed, as ``dronefleet
+run --seed`` and a sweep file's ``seeds`` do (delivery, items, lunar); replenishment has none and
+refuses them: its trials ``first_trial`` .. ``first_trial + trials - 1`` are its streams. Bad
+arguments raise :class:`dronefleet.config.ConfigError`
 (a ``ValueError``) with a one-line message naming the value and what is allowed, before
 anything is simulated.
 
@@ -28,13 +29,14 @@ import dataclasses
 import itertools
 import json
 import os
+import re
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import scenarios
-from .config import ConfigError, _show, check_depth
+from .config import ConfigError, _show, _suggest, check_depth, given_twice, named_file, shipped_files
 from .scenarios import Scenario
 from .sweeps import (MAX_RUNS, Progress, Sweep, _probe, available_cpus, check_collected, check_layout, collect,
                      run_sweep, simulate, sweep_of_document)
@@ -59,6 +61,14 @@ def _source(config: Any, argument: str) -> tuple[Scenario, str | os.PathLike | N
     if not isinstance(config, (str, os.PathLike)):
         raise ConfigError(f"{argument}={_show(config)}: expected None, a scenario name "
                           f"({', '.join(map(repr, registered))}) or the path of a TOML config file")
+    if isinstance(config, str) and re.fullmatch(r"[\w-]+", config) and not os.path.lexists(config):
+        # a bare word is a name, as on the command line: a shipped config's, or a typo of one
+        shipped = shipped_files("config")
+        if config not in shipped:
+            raise ConfigError(f"{argument}={config!r} is neither a scenario, a shipped config nor a file"
+                              f"{_suggest(config, [*registered, *shipped])}: scenarios {', '.join(registered)}; "
+                              f"shipped configs {', '.join(shipped)}")
+        config = named_file(config)
     return scenarios.scenario_of(config), config
 
 
@@ -68,19 +78,24 @@ def _changes(scenario: Scenario, fixed: Mapping[str, Any] | None, overrides: Map
     if fixed is not None and not isinstance(fixed, Mapping):
         raise ConfigError(f"set={_show(fixed)}: expected a dict of config keys to values, "
                           "e.g. set={'auction.rule': 'random'}")
-    given = [*(fixed or {}).items(), *overrides.items()]
+    # each change with the way the caller wrote it, for a refusal of a key given twice
+    given = [*((key, value, f"set[{_show(key)}]") for key, value in (fixed or {}).items()),
+             *((key, value, f"{key}={_show(value)}") for key, value in overrides.items())]
     if seed is not None:
-        given.append((scenario.seed_key, seed))
+        if scenario.seed_key is None:
+            raise scenario.seed_refusal(f"seed={_show(seed)}")
+        given.append((scenario.seed_key, seed, f"seed={_show(seed)}"))
     changes: dict[str, Any] = {}
-    for key, value in given:
+    how: dict[str, str] = {}
+    for key, value, written in given:
         if not isinstance(key, str):
             raise ConfigError(f"config key {_show(key)} is not a string: keys are names such as 'tau_minutes' "
                               "or 'orders.tau_minutes'")
         name = scenario.resolve_key(key)  # ConfigError listing the allowed keys
         check_depth(value, "", key)
         if name in changes:
-            raise ConfigError(f"{name} is given twice (as {_show(key)} and before, in set, a keyword or seed)", [name])
-        changes[name] = value
+            raise given_twice(name, how[name], written)
+        changes[name], how[name] = value, written
     return changes
 
 
@@ -193,9 +208,10 @@ def run(config: str | os.PathLike | None = None, *, seed: int | None = None,
         2024); or one installed from another package. Else a TOML config file of any scenario
         (it names its own).
     seed : int, optional
-        The scenario's seed key: delivery's ``seed`` (all randomness derives from it,
-        0 .. 2**63 - 1), replenishment's ``first_trial`` (trial k uses seed 876 k).
-        Default: the config's (delivery 0, replenishment 1).
+        The root seed, as ``dronefleet run --seed``: all randomness of a delivery, items or
+        lunar run derives from it. Default: the config's. Refused for replenishment, whose
+        trials are its streams (trial k uses seed 876 k): choose them with ``first_trial``
+        (from 1) and ``trials``.
     set : dict, optional
         Config changes whose keys are not Python names: ``{"auction.rule": "random"}``.
     **overrides
@@ -301,10 +317,10 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
         product, the last key varying fastest, as ``[grid]``. A list of such dicts is
         ``[[grid]]``: the union of their products, in order.
     seeds : iterable of int, optional
-        Values of the scenario's seed key, one run per value and configuration (innermost).
-        Required for delivery (``seed``); for replenishment they are first trials
-        (``first_trial``), optional: without them each configuration is one run of trials
-        1 .. ``trials``.
+        Root seeds, one run per value and configuration (innermost), as ``seed`` of
+        :func:`run`. Required for delivery; optional for items and lunar (without them each
+        configuration is one run at the base's seed); refused for replenishment, which has
+        no seed: put ``first_trial`` in the grid to run blocks of trials.
     base : str, path or None
         The config the grid changes, as ``config`` of :func:`run`: None (the paper's
         delivery scenario), a scenario's name or a TOML config file.
@@ -358,6 +374,8 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
     else:  # relative to the folder of SWEEP_LABEL, which is the working directory
         head["base"] = os.fspath(path)
     if seeds is not None:
+        if scenario.seed_key is None:
+            raise scenario.seed_refusal(f"seeds={_show(seeds)}")
         head["seeds"] = _seed_list(seeds)
     if set is not None and not isinstance(set, Mapping):
         raise ConfigError(f"set={_show(set)}: expected a dict of config keys to values, e.g. {{'horizon_weeks': 1}}")
@@ -385,7 +403,7 @@ def sweep(grid: Mapping[str, Iterable] | list[Mapping[str, Iterable]], *, seeds:
 def _run_and_collect(planned: Sweep, out: Path, workers: int) -> pandas.DataFrame:
     """Run the sweep ``planned`` into the dataset ``out`` on ``workers`` processes; its collected table."""
     # a bar in a notebook; elsewhere as the caller's logging shows dronefleet's INFO lines
-    _, failures = run_sweep(planned, out, planned.runs, workers, progress=Progress())
+    _, failures = run_sweep(planned, out, planned.runs, workers, progress=Progress(planned.scenario.replicate_noun))
     if failures:
         shown = "; ".join(f"{run.partition}: {error}" for run, error in list(failures.items())[:3])
         raise RuntimeError(f"{len(failures)} of {len(planned.runs)} runs failed: {shown}")

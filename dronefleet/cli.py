@@ -24,8 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from . import analyze, console, provenance, scenarios, sweeps
-from .config import (SHIPPED_FOLDERS, ConfigError, _show, check_numba_cache_dir, named_file, shipped_config,
-                     shipped_files)
+from .config import (SHIPPED_FOLDERS, ConfigError, _show, _suggest, check_numba_cache_dir, named_file,
+                     shipped_config, shipped_files)
 from .delivery.config import SECONDS_PER_WEEK, load_config
 from .outputs import OutputError, check_output_file, probe_folders, writing
 
@@ -224,8 +224,29 @@ def bounds(args: argparse.Namespace) -> int:
     return 0
 
 
+def export_command(args: argparse.Namespace) -> int:
+    """``dronefleet export SOURCE [--out DIR] [--overwrite]``: its tables as CSV (:mod:`dronefleet.export`)."""
+    from .export import export
+
+    out = export(args.source, args.out, args.overwrite)
+    log.info(f"dronefleet export: {', '.join(sorted(p.name for p in out.glob('*.csv')))} in {out}")
+    return 0
+
+
 def configs_command(args: argparse.Namespace) -> int:
-    """``dronefleet configs``: the shipped configs and sweep files, a line each, by the name commands take."""
+    """``dronefleet configs``: the shipped configs and sweep files, a line each, by the name commands take;
+    ``dronefleet configs show NAME``: the text of one (to copy and edit: a wheel install has no configs/)."""
+    if args.show:
+        if args.show[0] != "show" or len(args.show) != 2:
+            raise ConfigError(f"configs {' '.join(args.show)}: expected 'configs' alone or 'configs show NAME'")
+        name = args.show[1]
+        kinds = [kind for kind in ("config", "sweep") if name in shipped_files(kind)]
+        if not kinds:
+            every = [*shipped_files("config"), *shipped_files("sweep")]
+            raise ConfigError(f"{_show(name)} is not a shipped config or sweep file{_suggest(name, every)}; "
+                              "dronefleet configs lists them")
+        print(shipped_config(*SHIPPED_FOLDERS[kinds[0]], f"{name}.toml").read_text(encoding="utf-8"), end="")
+        return 0
     for kind, heading in (("config", "configs: dronefleet run NAME, dronefleet bounds NAME"),
                           ("sweep", "sweep files: dronefleet sweep plan|run|status|collect NAME")):
         files = shipped_files(kind)
@@ -380,8 +401,19 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     p.set_defaults(func=bounds)
     p = commands.add_parser("configs", help="list the shipped configs and sweep files, by the names commands take",
                             description="The configs and sweep files installed with dronefleet, a line each; "
-                                        "run, bounds and sweep take their names as well as paths.")
+                                        "run, bounds and sweep take their names as well as paths. "
+                                        "'configs show NAME' prints one, e.g. to save as a config of your own: "
+                                        "dronefleet configs show paper > mine.toml")
+    p.add_argument("show", nargs="*", metavar="show NAME",
+                   help="print the shipped config or sweep file NAME")
     p.set_defaults(func=configs_command)
+    p = commands.add_parser("export", help="write tables as CSV: a parquet file, a run folder or a sweep's dataset",
+                            description="Every table of SOURCE as <table>.csv in one folder, for tools that "
+                                        "read no parquet (a spreadsheet, R's read.csv).")
+    p.add_argument("source", metavar="SOURCE", help="a parquet file, a run folder or a sweep's dataset")
+    p.add_argument("--out", type=_path, metavar="DIR", help="the folder of the CSV files (default: SOURCE-csv)")
+    p.add_argument("--overwrite", action="store_true", help="replace the CSV files of an earlier export in --out")
+    p.set_defaults(func=export_command)
     _add_sweep_commands(commands)
     _add_analyze_commands(commands)
     _add_reproduce_command(commands, reproduce_arguments)
@@ -398,6 +430,16 @@ def _at_least(least):
             raise argparse.ArgumentTypeError(f"expected an integer >= {least} (at most 18 digits), got {shown}")
         return int(text)
     return integer
+
+
+def _figure(names: tuple[str, ...]):
+    """argparse type: one of the figure ``names``; otherwise the closest one suggested, not all of them listed."""
+    def figure(text):
+        if text not in names:
+            raise argparse.ArgumentTypeError(f"{_show(text)} is not a figure{_suggest(text, names)}; "
+                                             f"dronefleet reproduce --list shows all {len(names) - 1}")
+        return text
+    return figure
 
 
 def _path(text: str) -> str:
@@ -419,7 +461,9 @@ def _add_sweep_commands(commands):
                         help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
     p = actions.add_parser("plan", parents=[common], help="print the runs and tasks, write a SLURM job-array script")
     p.add_argument("--out", type=_path, help="where to write the script (default: DIR/<name>/<name>.sbatch)")
-    p.add_argument("--time", help="#SBATCH --time of each task, e.g. 00:30:00")
+    p.add_argument("--time", help="#SBATCH --time of each task, e.g. 00:30:00 (default: none, the partition's)")
+    p.add_argument("--mem", default=sweeps.DEFAULT_MEM,
+                   help=f"#SBATCH --mem of each task, e.g. 4G (default: {sweeps.DEFAULT_MEM})")
     p.add_argument("--partition", help="#SBATCH --partition")
     p.add_argument("--account", help="#SBATCH --account")
     p.set_defaults(func=sweeps.plan_command)
@@ -469,8 +513,9 @@ def _add_reproduce_command(commands, arguments):
     from . import reproduce
 
     studies = reproduce.studies()
-    p.add_argument("figure", nargs="+", choices=(*reproduce.all_figures(), "all"),
-                   help="one or more figures, or all (figures asked for together share their runs)")
+    p.add_argument("figure", nargs="+", type=_figure((*reproduce.all_figures(), "all")), metavar="FIGURE",
+                   help="one or more figures (reproduce --list shows them), or all (figures asked for together "
+                        "share their runs)")
     p.add_argument("--list", action=_ListStudies)
     p.add_argument("--quick", action="store_true",
                    help="a check in seconds, under <out>/quick/: " + ", ".join(

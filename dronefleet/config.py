@@ -172,15 +172,25 @@ def _name(name: str) -> str:
     return name if name.isprintable() and len(name) <= 60 else _show(name)
 
 
+def seed_refusal(word: str, scenario: str, why: str = "") -> ConfigError:
+    """The refusal of a seed given as ``word`` (``--seed``, ``seed=3``, ``[sweep] seeds``) to a scenario
+    without a root seed (its ``SEED_KEY`` is None): "seed" means the root seed everywhere, never a
+    replicate's index; ``why`` says what chooses its replicates instead."""
+    return ConfigError(f"{word} does not apply to a {scenario} run, which has no root seed{': ' if why else ''}{why}")
+
+
 def _suggest(word: str, candidates: Iterable[str]) -> str:
     """' (did you mean 'x'?)' for the closest candidate, or ''.
 
-    A unique candidate that is ``word`` plus a suffix (a key written without
-    its unit, ``speed`` for ``speed_m_s``) wins; otherwise difflib's closest.
+    A unique candidate that differs from ``word`` in case alone (``gr`` for ``GR``) wins, then
+    one that is ``word`` plus a suffix (a key written without its unit, ``speed`` for
+    ``speed_m_s``); otherwise difflib's closest.
     """
     candidates = list(candidates)
+    cased = [c for c in candidates if c.lower() == word.lower()]
     prefixed = [c for c in candidates if c.startswith(word + "_")]
-    close = prefixed if len(prefixed) == 1 else difflib.get_close_matches(word, candidates, n=1)
+    close = next((found for found in (cased, prefixed) if len(found) == 1), None) or \
+        difflib.get_close_matches(word, candidates, n=1)
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
@@ -245,15 +255,12 @@ class Sections:
         """``(values, origin)``: ``defaults`` < the file at ``path`` < ``overrides`` (``"key=value"``,
         in order, all parsed before the file is read) < ``seed`` (the ``seed`` key, when given),
         and where each value that is not a default came from."""
-        parsed = [(_parse_override(o, self.resolve_key), o) for o in overrides]
+        parsed = parse_overrides(overrides, self.resolve_key, seed)
         values, origin = dict(defaults), {}
         if path is not None:
             values.update(self.flatten(read_toml(path)[1], str(path), origin))
-        for (name, value), text in parsed:
-            values[name] = value
-            origin[name] = f"--set {text}"
-        if seed is not None:
-            values["seed"], origin["seed"] = seed, "--seed"
+        for name, value, how in parsed:
+            values[name], origin[name] = value, how
         return values, origin
 
     def changed(self, current: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -269,6 +276,30 @@ def with_sources(error: ConfigError, origin: Mapping[str, str]) -> ConfigError:
     """``error``, naming where its keys' values were set (``origin``: key -> file or ``--set``), if known."""
     sources = list(dict.fromkeys(origin[k] for k in error.keys if k in origin))
     return ConfigError(f"{error} (set in {'; '.join(sources)})", error.keys) if sources else error
+
+
+def given_twice(name: str, first: str, second: str) -> ConfigError:
+    """The refusal of config key ``name`` given twice, as ``first`` and as ``second`` (how the user
+    wrote each: ``--set tau_minutes=20``, ``--seed 3``, ``seed=3``, ``set['run.seed']``): the same
+    in every interface, never the last one silently."""
+    return ConfigError(f"{name} is given twice (as {first} and as {second}): give each key once", [name])
+
+
+def parse_overrides(overrides: Iterable[str], resolve: Callable[[str], str],
+                    seed: int | None = None) -> list[tuple[str, Any, str]]:
+    """``--set`` texts (and ``--seed``) -> ``(name, value, how it was given)``, in order; a key given
+    twice is refused (:func:`given_twice`)."""
+    parsed, given = [], {}
+    for text in overrides:
+        name, value = _parse_override(text, resolve)
+        parsed.append((name, value, f"--set {text}"))
+    if seed is not None:
+        parsed.append(("seed", seed, f"--seed {seed}"))
+    for name, _, how in parsed:
+        if name in given:
+            raise given_twice(name, given[name], how)
+        given[name] = how
+    return parsed
 
 
 def _parse_override(text: Any, resolve: Callable[[str], str]) -> tuple[str, Any]:

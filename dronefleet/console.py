@@ -86,10 +86,49 @@ def progress(total: float, unit: str, desc: str) -> Any:
     shown = logger.isEnabledFor(logging.INFO)
     if not sys.stderr.isatty():
         return ProgressLines(total, unit, desc, shown)
-    from tqdm import tqdm  # not for --help and --version: a command that draws no bar does not load it
+    return _LateBar(total, unit, desc, shown)
 
-    return tqdm(total=total, unit=unit, desc=desc, file=sys.stderr, disable=not shown, leave=False,
-                dynamic_ncols=True)
+
+class _LateBar:
+    """A terminal's tqdm bar, drawn from the first progress on: while numba compiles (before any),
+    the compile notice stands alone instead of under a bar stuck at 0 %, and the bar, drawn after
+    it, is cleared from the screen when closed (``leave=False``). tqdm's interface as
+    :class:`ProgressLines` has it."""
+
+    def __init__(self, total: float, unit: str, desc: str, shown: bool) -> None:
+        self.total, self.unit, self.desc, self.shown = total, unit, desc, shown
+        self.bar: Any = None
+        self.postfix = ""
+
+    @property
+    def n(self) -> float:
+        return 0 if self.bar is None else self.bar.n
+
+    def update(self, n: float = 1) -> None:
+        if self.bar is None:
+            if not n:
+                return
+            from tqdm import tqdm  # not for --help and --version: a command that draws no bar does not load it
+
+            self.bar = tqdm(total=self.total, unit=self.unit, desc=self.desc, file=sys.stderr, disable=not self.shown,
+                            leave=False, dynamic_ncols=True, initial=n, postfix=self.postfix or None)
+            return
+        self.bar.update(n)
+
+    def set_postfix_str(self, text: str, refresh: bool = True) -> None:
+        self.postfix = text
+        if self.bar is not None:
+            self.bar.set_postfix_str(text, refresh=refresh)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+    def __enter__(self) -> _LateBar:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 class ProgressLines:

@@ -60,8 +60,8 @@ class ScenarioContract(Protocol):
     DEFAULTS: Mapping[str, Any]       # key -> default; its type (int, float, str, tuple) is the key's type
     TABLES: tuple[str, ...]           # the tables ``simulate`` makes, ``"summary"`` among them
     FIGURES: tuple[str, ...]          # its figures in ``dronefleet reproduce`` (possibly empty)
-    SEED_KEY: str                     # the key a sweep's ``[sweep] seeds`` sets, one run per value
-    SEEDS_REQUIRED: bool              # whether a sweep must list seeds
+    SEED_KEY: str | None              # the root seed: what --seed, seed= and [sweep] seeds set (None: it has none)
+    SEEDS_REQUIRED: bool              # whether a sweep must list seeds (False where SEED_KEY is None)
 
     def load(self, path: str | os.PathLike | None, overrides: Iterable[str], seed: int | None) -> Any:
         """The config of a TOML file (None: the defaults), ``--set "key=value"`` strings, a seed (None: the file's)."""
@@ -100,7 +100,7 @@ REQUIRED = ("NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEED
 #: The optional hooks, each with its parameters (what it gets and returns: docs/scenario-contract.md):
 #:
 #: - ``format_bounds(config) -> str``: analytic bounds for ``dronefleet bounds``; ConfigError where none exists.
-#: - ``replicates(config) -> range``: the trials a run holds, if several; a sweep refuses seeds repeating one.
+#: - ``replicates(config) -> range``: the trials a run holds, if several (numbered from 1).
 #: - ``replay_data(run_dir[, trial]) -> dict``: the replay page's data of a run folder (JSON-ready, ``title``
 #:   and ``duration_s`` [s] at least), drawn by the ``replay.js`` beside the scenario's module; a scenario
 #:   with ``replicates`` takes ``trial`` too (``replay --trial K``; None: the run's first).
@@ -116,8 +116,8 @@ OPTIONAL = {"format_bounds": ("config",), "replicates": ("config",), "replay_dat
 _PARAMETERS = {"load": ("path", "overrides", "seed"), "resolve_key": ("key",), "replace": ("config", "changes"),
                "value": ("config", "name"), "read_config": ("path",), "table_schemas": (), "simulate": ("config",),
                "format_summary": ("tables",), "describe": ("config",), "label": ("config",), **OPTIONAL}
-_TYPES = {"NAME": str, "SCHEMA": Mapping, "DEFAULTS": Mapping, "TABLES": tuple, "FIGURES": tuple, "SEED_KEY": str,
-          "SEEDS_REQUIRED": bool}
+_TYPES = {"NAME": str, "SCHEMA": Mapping, "DEFAULTS": Mapping, "TABLES": tuple, "FIGURES": tuple,
+          "SEED_KEY": (str, type(None)), "SEEDS_REQUIRED": bool}
 
 
 def _takes(function: Callable, count: int) -> bool:
@@ -136,12 +136,14 @@ def contract_problems(scenario: object) -> list[str]:
 
     Checked without running anything: the members of :data:`REQUIRED` present and of their
     kind, each function (and optional hook present) callable with its parameters, SCHEMA and
-    DEFAULTS naming the same keys, ``"summary"`` among TABLES, SEED_KEY a key of SCHEMA.
+    DEFAULTS naming the same keys, ``"summary"`` among TABLES, SEED_KEY None or a key of SCHEMA.
     """
     problems = [f"has no {name}" for name in REQUIRED if not hasattr(scenario, name)]
     for name, kind in _TYPES.items():
         if hasattr(scenario, name) and not isinstance(getattr(scenario, name), kind):
-            problems.append(f"{name} is a {type(getattr(scenario, name)).__name__}, not a {kind.__name__}")
+            kinds = " or ".join("None" if k is type(None) else k.__name__ for k in (kind if isinstance(kind, tuple)
+                                                                                      else (kind,)))
+            problems.append(f"{name} is a {type(getattr(scenario, name)).__name__}, not a {kinds}")
     for name, parameters in _PARAMETERS.items():
         function = getattr(scenario, name, None)
         if function is None:
@@ -159,8 +161,10 @@ def contract_problems(scenario: object) -> list[str]:
                  if not isinstance(field, Field)]
     if "summary" not in scenario.TABLES:
         problems.append("TABLES has no 'summary'")
-    if scenario.SEED_KEY not in scenario.SCHEMA:
+    if scenario.SEED_KEY is not None and scenario.SEED_KEY not in scenario.SCHEMA:
         problems.append(f"SEED_KEY {scenario.SEED_KEY!r} is not a key of SCHEMA")
+    if scenario.SEED_KEY is None and scenario.SEEDS_REQUIRED:
+        problems.append("SEEDS_REQUIRED is True, but SEED_KEY is None (no seed to list)")
     return problems
 
 

@@ -54,6 +54,15 @@ def _outcome(future):
 
 #: The signals that stop a sweep: Ctrl-C, and SIGTERM (a scheduler ending a job, ``scancel``).
 STOPPING = {signal.SIGINT, signal.SIGTERM}
+#: Whether this platform has signal masks (POSIX; not Windows, where a worker starts without them).
+MASKS = hasattr(signal, "pthread_sigmask")
+
+
+def _block_stopping(block: bool) -> None:
+    """Block (or unblock) :data:`STOPPING` in this thread, where the platform has signal masks; elsewhere
+    nothing: a Ctrl-C while a worker starts may then print that worker's traceback, nothing worse."""
+    if MASKS:
+        signal.pthread_sigmask(signal.SIG_BLOCK if block else signal.SIG_UNBLOCK, STOPPING)
 
 
 def _start_worker(parent):
@@ -62,7 +71,7 @@ def _start_worker(parent):
     # Started with them blocked (see local): ignored from now on, one pending is dropped.
     for stopping in STOPPING:
         signal.signal(stopping, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
+    _block_stopping(False)
     _die_with_parent(parent)
 
 
@@ -169,11 +178,11 @@ def _submit(pool, function, item):
     # does); it is delivered here once unblocked. The worker's start starts that tracker if it
     # is not running, which unblocks both signals as it ends: so it is started first.
     resource_tracker.ensure_running()
-    signal.pthread_sigmask(signal.SIG_BLOCK, STOPPING)
+    _block_stopping(True)
     try:
         return pool.submit(_interruptible, function, item)
     finally:
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPPING)
+        _block_stopping(False)
 
 
 def _workers(pool):
@@ -277,7 +286,7 @@ def contained(function: Callable[[Item], Result], item: Item) -> Result:
         else:  # Ctrl-C or SIGTERM here while the item runs: a plugin that ignores them must not hold us
             for process in workers:
                 with contextlib.suppress(ProcessLookupError):
-                    os.kill(process.pid, signal.SIGKILL)
+                    process.kill()  # SIGKILL; TerminateProcess where there are no signals
             pool.shutdown(wait=False)
         raise
     _release(pool)

@@ -19,10 +19,11 @@ is smaller than :data:`MIN_FONT_SIZE` in print; a figure of several panels is on
 panels lettered (a), (b), ... by :func:`letter_panels` as the captions letter them.
 """
 
+import contextvars
 import itertools
 import os
 import string
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from types import ModuleType
@@ -146,6 +147,32 @@ def letter_panels(axes: Iterable[Any]) -> None:
                     fontweight="bold")
 
 
+#: The mark of the figures drawn now, or "": ``reproduce --quick`` sets what its runs were (:func:`marked`).
+_MARK: contextvars.ContextVar[str] = contextvars.ContextVar("dronefleet_figure_mark", default="")
+
+
+@contextmanager
+def marked(what: str) -> Iterator[None]:
+    """Mark every figure drawn within as a quick check (``what``: its small runs, e.g. "2 trials of 200
+    ticks"): a large translucent "QUICK CHECK" across it and a line saying what it ran, so that it is
+    never taken for a published figure."""
+    token = _MARK.set(what)
+    try:
+        yield
+    finally:
+        _MARK.reset(token)
+
+
+def _stamp(fig) -> None:
+    """:func:`marked`'s mark on ``fig`` (after the layout: it overlays the drawing, moving nothing)."""
+    what = _MARK.get()
+    if what:
+        fig.text(0.5, 0.5, "QUICK CHECK", ha="center", va="center", rotation=25, fontsize=44, color="#c00000",
+                 alpha=0.22, fontweight="bold", zorder=100)
+        fig.text(0.5, 0.22, f"{what}: not the published figure", ha="center", va="center", fontsize=8,
+                 color="#c00000", zorder=100, bbox={"facecolor": "white", "edgecolor": "#c00000", "alpha": 0.8})
+
+
 @contextmanager
 def _figure(path, figsize, rc=None, mosaic=None, **subplots):
     """A new figure and its axes (``Figure.subplots(**subplots)``, or with ``mosaic`` the dict of
@@ -174,6 +201,7 @@ def _figure(path, figsize, rc=None, mosaic=None, **subplots):
         fig.set_dpi(DPI)
         fig.get_layout_engine().execute(fig)
         fig.set_layout_engine(None)
+        _stamp(fig)
         for target, suffix in zip(figure_paths(path), FORMATS):
             tmp = target.with_name(f".{target.name}.{os.getpid()}.tmp")
             try:

@@ -208,6 +208,8 @@ def select_run(dataset: Path, selection: list[str]) -> sweeps.Run:
             raise ConfigError(f"--run {_show(text)}: expected KEY=VALUE, one of the keys {', '.join(keys)}, "
                               f"e.g. --run {keys[0]}={parts[0][0][keys[0]]}")
         name = key if key in keys else key.rpartition(".")[2]  # section.key, as everywhere
+        if name not in keys and sweeps.ROOT_SEED in keys and name == "seed":  # the config's word for it
+            name = sweeps.ROOT_SEED
         if name not in keys:
             raise ConfigError(f"--run {_show(text)}: the runs of the dataset {dataset} are told apart by "
                               f"{', '.join(keys)}; choose with those")
@@ -253,7 +255,7 @@ def _run_folder(run: sweeps.Run, dataset: Path, folder: Path) -> Path:
                 (run_dir / f"{table}.parquet").symlink_to(run.path(dataset, table).absolute())
         return run_dir
     log.info(f"dronefleet replay: the tables of run {run.partition} were not kept; simulating it again from "
-             f"its config ({scenario.seed_key} {run.value(scenario.seed_key)})")
+             "its config")
     tables = sweeps.simulate(scenario, run.config)
     part = run.path(dataset, "summary")
     again = tables["summary"].drop_columns([key for key in run.keys if key in tables["summary"].column_names])

@@ -156,7 +156,7 @@ class Study:
         sweep = self.sweep(name)
         out = self.out(name)
         start = time.perf_counter()
-        ran, failures = run_sweep(sweep, out, sweep.runs, self.jobs, progress=Progress())
+        ran, failures = run_sweep(sweep, out, sweep.runs, self.jobs, progress=Progress(sweep.scenario.replicate_noun))
         self.log(f"  sweep {sweep.name}: {sweep.describe()}; ran {ran} in {time.perf_counter() - start:.1f} s, "
                  f"{len(sweep.runs) - ran} reused")
         if failures:
@@ -567,11 +567,15 @@ def reproduce(figures: Sequence[str], out: str | os.PathLike = DEFAULT_OUT, quic
 def _draw(task: tuple[str | os.PathLike, bool, float | None, str]) -> tuple[list[Path], float]:
     """Draw one figure, here or in a worker process: ``task`` is (results root, quick, theta, figure);
     returns the paths of its files and the seconds the drawing took."""
+    from .figstyle import marked
+
     out, quick, theta, figure = task
     study = Study(out, quick, jobs=1, theta=theta)
     start = time.perf_counter()
-    with writing(study.root / figure):  # a drawing that cannot be written (disk full): one line
-        paths = owner(figure).draw(study, figure)
+    drawer = owner(figure)
+    # a quick figure says so on its face: it must never pass for the published one
+    with writing(study.root / figure), marked(drawer.QUICK if quick else ""):
+        paths = drawer.draw(study, figure)
     return paths, time.perf_counter() - start
 
 

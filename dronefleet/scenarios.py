@@ -42,7 +42,7 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .config import SCENARIO_KEY, ConfigError, _show, _suggest, one_line, read_toml
+from .config import SCENARIO_KEY, ConfigError, _show, _suggest, one_line, read_toml, seed_refusal
 from .contract import ENTRY_POINT_GROUP, Column, FigureStudy, Field, contract_problems
 from .plugins import importing
 
@@ -92,8 +92,19 @@ class Scenario:
         return self.module.DEFAULTS
 
     @property
-    def seed_key(self) -> str:
+    def seed_key(self) -> str | None:
+        """The root seed's key (what ``--seed``, ``seed=`` and a sweep's ``seeds`` set), or None."""
         return self.module.SEED_KEY
+
+    @property
+    def replicate_noun(self) -> str:
+        """What one of a run's replicates is called ("trial", "run"; a scenario's ``REPLICATE_NOUN``), as
+        progress counts them; "run" for a scenario whose run is one replicate."""
+        return getattr(self.module, "REPLICATE_NOUN", "replicate" if hasattr(self.module, "replicates") else "run")
+
+    def seed_refusal(self, word: str) -> ConfigError:
+        """The one-line refusal of a seed given as ``word`` to a scenario without one (:attr:`seed_key` None)."""
+        return seed_refusal(word, self.name, getattr(self.module, "NO_SEED", ""))
 
     @property
     def seeds_required(self) -> bool:

@@ -41,12 +41,13 @@ Keys in ``[set]`` and ``[grid]`` are ``section.key`` or bare key names, as with
 ``dronefleet run --set``. :func:`load_sweep` builds (and so validates) the config of
 every run before anything runs; any problem is a :class:`SweepError` naming the key.
 
-Seeds: ``[sweep] seeds`` sets the scenario's seed key, one run per value. A delivery run is
-one replicate, its ``seed``, and a delivery sweep must list its seeds. A replenishment run
-holds all its ``trials`` (trial k uses seed 876 k), so its seed key is ``first_trial`` and
-seeds are optional: without them each configuration is one run of the base's trials
-(1..trials); ``seeds = [1, 51]`` with ``trials = 50`` runs trials 1-100 in two runs per
-configuration. Seeds whose runs would hold a trial twice are refused.
+Seeds: ``[sweep] seeds`` sets the scenario's root seed (its seed key, ``seed``), one run per
+value, as ``--seed`` and ``dronefleet.run(seed=...)`` do. A delivery run is one replicate of its
+``seed``, and a delivery sweep must list its seeds. An items or lunar run holds several
+replicates (trials ``first_trial ..``, runs ``first_run ..``) of its root seed: seeds are
+optional, without them each configuration is one run at the base's seed. A replenishment run
+has no root seed (trial k uses seed 876 k): its seeds are refused, and ``first_trial = [1, 51]``
+in the grid with ``trials = 50`` runs trials 1-100 in two runs per configuration.
 
 ``[grid]`` is one table of lists: the runs are their product. Its keys are taken in one
 canonical order, sorted by name, whatever their order in the file: two files that differ
@@ -74,7 +75,9 @@ The dataset of a sweep, under ``<results>/<name>/``::
 timeseries, summary``; replenishment: ``summary``, one row per trial, and ``timeseries``),
 so every table is its own hive dataset that pandas, pyarrow and DuckDB read as one table.
 The partition keys are the grid's parameter names (bare, sorted by name; with ``[[grid]]``
-the keys of any of its tables), then the seed key (``seed``, ``first_trial``); values are
+the keys of any of its tables), then the root seed if the scenario has one: ``seed``, or
+``root_seed`` where a run holds several replicates whose tables carry each one's own stream
+seed as ``seed`` (items, lunar; :func:`partition_name`); values are
 ``str(value)`` of the config's value (``15.0``, ``3``, ``random``), percent-encoded as hive
 readers expect, so one layout holds every run of a ``[[grid]]`` union (a key that a table
 does not name has the run's value from the base or ``[set]``). A file holds no column named
@@ -157,17 +160,35 @@ _SCHEDULER = re.compile(rf"(?:(?:tcp|tls|ucx|ws|wss)://)?(?P<host>{_LABEL}(?:\.{
                         r":(?P<port>[0-9]{1,5})")
 
 
+#: The partition name of the root seed of a scenario whose run holds several replicates: its tables
+#: carry each replicate's own stream seed as a column ``seed`` (items, lunar), which a partition
+#: named ``seed`` would replace with the root seed (hive readers refuse a column that is both).
+ROOT_SEED = "root_seed"
+
+
+def partition_name(scenario: Scenario, key: str) -> str:
+    """The name of config key ``key`` in a sweep's partition paths: the key itself, but
+    :data:`ROOT_SEED` for the root seed of a scenario whose runs hold several replicates."""
+    several = hasattr(scenario.module, "replicates")
+    return ROOT_SEED if several and key == scenario.seed_key else key
+
+
+def config_key(scenario: Scenario, name: str) -> str:
+    """The config key of partition name ``name`` (:func:`partition_name`'s inverse)."""
+    return scenario.seed_key if name == ROOT_SEED and scenario.seed_key is not None else name
+
+
 @dataclass(frozen=True)
 class Run:
     """One run of a sweep: its resolved config, the partition keys that place it, its scenario."""
 
     config: Any
-    keys: tuple[str, ...]   # the grid's parameter names (sorted), then the scenario's seed key
+    keys: tuple[str, ...]   # the grid's parameter names (sorted), then the seed's partition name (if any)
     scenario: Scenario
 
     def value(self, key: str) -> Any:
-        """The run's value of config key ``key``."""
-        return self.scenario.value(self.config, key)
+        """The run's value of partition key or config key ``key``."""
+        return self.scenario.value(self.config, config_key(self.scenario, key))
 
     @property
     def partition(self) -> str:
@@ -215,22 +236,25 @@ class Sweep:
 
     def describe(self) -> str:
         """``3 rule x 6 tau_minutes x 20 seeds = 360 runs``; with ``[[grid]]``, the products summed:
-        ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown); with
-        ``[design]``, ``sobol design: 64 samples of 4 keys = 640 points (631 distinct) x 2 seeds = 1262 runs``."""
+        ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown); a
+        scenario without a root seed has no seeds factor; with ``[design]``, ``sobol design: 64 samples
+        of 4 keys = 640 points (631 distinct) x 2 seeds = 1262 runs``."""
+        n_seeds = len(self.seeds) if self.scenario.seed_key is not None else None
         if self.design is not None:
-            seeds = f"{len(self.seeds)} seed{'s' if len(self.seeds) != 1 else ''}"
-            return f"{self.design.describe()} x {seeds} = {len(self.runs)} runs"
-        return f"{_factors(self.products, len(self.seeds))} = {len(self.runs)} runs"
+            seeds = "" if n_seeds is None else f" x {n_seeds} seed{'s' if n_seeds != 1 else ''}"
+            return f"{self.design.describe()}{seeds} = {len(self.runs)} runs"
+        return f"{_factors(self.products, n_seeds)} = {len(self.runs)} runs"
 
 
-def _factors(products, n_seeds: int) -> str:
-    """``3 rule x 6 tau_minutes x 20 seeds``, or ``(1 point + 7 n_chargers x 5 charger_capacity_factor) x 1 seed``."""
-    seeds = f"{n_seeds} seed{'s' if n_seeds != 1 else ''}"
+def _factors(products, n_seeds: int | None) -> str:
+    """``3 rule x 6 tau_minutes x 20 seeds``, or ``(1 point + 7 n_chargers x 5 charger_capacity_factor) x 1 seed``;
+    no seeds factor for ``n_seeds`` None (a scenario without a root seed)."""
+    seeds = [] if n_seeds is None else [f"{n_seeds} seed{'s' if n_seeds != 1 else ''}"]
     if len(products) == 1:
-        return " x ".join([*(f"{len(values)} {key}" for key, values in products[0].items()), seeds])
+        return " x ".join([*(f"{len(values)} {key}" for key, values in products[0].items()), *seeds]) or "1 point"
     terms = [" x ".join(f"{len(values)} {key}" for key, values in product.items() if len(values) > 1) or "1 point"
              for product in products]
-    return f"({' + '.join(terms)}) x {seeds}"
+    return " x ".join([f"({' + '.join(terms)})", *seeds])
 
 
 # --------------------------------------------------------------------------- reading a sweep file
@@ -387,18 +411,6 @@ def _scenario(head: dict, base: Path | None, path: Path) -> Scenario:
     return of_base
 
 
-def _check_replicates(scenario: Scenario, runs: list[Run], where: str) -> None:
-    """Refuse seeds whose runs (of one configuration) would hold a replicate twice."""
-    held = sorted(((scenario.replicates(run.config), run) for run in runs), key=lambda pair: pair[0].start)
-    for (first, a), (second, b) in zip(held, held[1:]):
-        if second.start < first.stop:
-            key, last = scenario.seed_key, min(first.stop, second.stop) - 1
-            shared = str(last) if last == second.start else f"{second.start}-{last}"
-            raise SweepError(f"{where}: {key} = {a.value(key)} and {key} = {b.value(key)} give runs that both hold "
-                             f"replicates {shared} (each run holds {len(first)}): space the seeds at least that "
-                             "far apart", [key])
-
-
 def load_sweep(path: str | os.PathLike, changes: Mapping[str, Any] | None = None,
                seeds: Sequence[int] | None = None) -> Sweep:
     """Read and validate a sweep file: every run's config is built here, before any run.
@@ -463,6 +475,8 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
         if both:
             raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in {label}", both)
     listed = head.get("seeds") if seeds is None else list(seeds)
+    if key is None and listed is not None:  # "seed" means the root seed everywhere, never a replicate's index
+        raise SweepError(str(scenario.seed_refusal(f"{path}: [sweep] seeds")), ["seeds"])
     # without seeds (where the scenario allows it), one run per configuration at the base's seed value
     seeds = None if listed is None and not scenario.seeds_required else _seeds(listed, f"{path}: [sweep] seeds")
     per_point = 1 if seeds is None else len(seeds)
@@ -477,7 +491,7 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
             raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in [design.ranges]", both)
     n_runs = sum(math.prod(len(values) for values in product.values()) for _, product in products) * per_point
     if n_runs > MAX_RUNS:
-        factors = _factors([product for _, product in products], per_point)
+        factors = _factors([product for _, product in products], None if key is None else per_point)
         raise SweepError(f"{path}: {factors} = {n_runs:,} runs; a sweep may hold at most {MAX_RUNS:,} runs: "
                          "split it into several sweeps (another [sweep] name each)")
 
@@ -490,13 +504,14 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     except ConfigError as error:
         raise SweepError(f"{path}: [set]: {error}", error.keys) from None
     if seeds is None:
-        seeds = (scenario.value(config, key),)
+        seeds = () if key is None else (scenario.value(config, key),)
     for seed in seeds:
         try:
             scenario.replace(config, {key: seed})
         except ConfigError as error:
             raise SweepError(f"{path}: [sweep] seeds: {error}", error.keys) from None
-    keys = (*(design.keys if design else sorted({k for _, product in products for k in product})), key)
+    grid_keys = design.keys if design else tuple(sorted({k for _, product in products for k in product}))
+    keys = grid_keys if key is None else (*grid_keys, partition_name(scenario, key))
     # each grid cell, or each distinct point of the design (points that round alike share their run)
     points = ([("[design]", changes) for changes in design.distinct()] if design else
               [(label, dict(zip(product, point))) for label, product in products
@@ -512,11 +527,9 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
             raise SweepError(f"{path}: {where} is the configuration of {given[at_point]}: "
                              "a sweep runs each configuration once", list(changes))
         given[at_point] = where
-        point_runs = [Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds]
-        if len(point_runs) > 1 and scenario.replicates(at_point) is not None:
-            _check_replicates(scenario, point_runs, f"{path}: [sweep] seeds at {where}")
-        runs.extend(point_runs)
-    values = {k: tuple(dict.fromkeys(run.value(k) for run in runs)) for k in keys[:-1]}
+        runs.extend([Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds] if seeds
+                    else [Run(at_point, keys, scenario)])
+    values = {k: tuple(dict.fromkeys(run.value(k) for run in runs)) for k in grid_keys}
     return Sweep(path.absolute(), name, scenario, tuple({k: tuple(v) for k, v in product.items()}
                                                        for _, product in products),
                  values, seeds, runs_per_task, tuple(runs), text, design)
@@ -1013,16 +1026,19 @@ def available_cpus() -> int:
 
 
 class Progress:
-    """``run_sweep``'s ``progress``: finished runs as a tqdm bar with the failures counted,
-    drawn as :func:`dronefleet.console.progress` says (on a terminal, without ``-q``)."""
+    """``run_sweep``'s ``progress``: what its finished runs hold (lunar runs, items or replenishment
+    trials: a sweep of 3 configurations of 50 lunar runs counts to 150, not to 3) as a tqdm bar with
+    the failed runs counted, drawn as :func:`dronefleet.console.progress` says (on a terminal,
+    without ``-q``). ``noun`` names what is counted (:attr:`Scenario.replicate_noun`)."""
 
-    def __init__(self) -> None:
+    def __init__(self, noun: str = "run") -> None:
+        self.noun = noun
         self.bar = None  # made at the first call, which tells the number of runs
 
-    def __call__(self, finished: int, total: int, failed: int) -> None:
+    def __call__(self, finished: float, total: float, failed: int) -> None:
         if self.bar is None:
-            self.bar = console.progress(total, "run", "  runs")
-        self.bar.set_postfix_str(f"{failed} failed", refresh=False)
+            self.bar = console.progress(total, self.noun, f"  {self.noun}s")
+        self.bar.set_postfix_str(f"{console.counted(failed, 'sweep run')} failed", refresh=False)
         self.bar.update(finished - self.bar.n)
         if finished == total:
             self.bar.close()
@@ -1039,7 +1055,8 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
 
     Locally on ``jobs`` processes, or, with ``scheduler`` (a Dask scheduler address), one
     Dask task per run (the workers write the files: ``out`` must be on a filesystem they
-    share). ``progress(finished, to_run, failed)`` is called after every run. Returns the
+    share). ``progress(finished, to_run, failed)`` is called after every run, the first two counted
+in what the runs hold (:meth:`Scenario.replicates`; a run of none counts 1). Returns the
     number of runs executed and the failed ones with their errors.
 
     A run whose worker process dies (killed, out of memory, segfault) or that the executor
@@ -1071,7 +1088,10 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
         if sweep.design is not None:
             designs.write_samples(sweep.design, out)
     failures = {}
-    for finished, (run, error, crash) in enumerate(results, start=1):
+    # what each run holds (its trials or lunar runs; 1 for a delivery run): the progress counts those
+    held = {run: len(run.scenario.replicates(run.config) or range(1)) for run in todo}
+    total, finished = sum(held.values()), 0
+    for run, error, crash in results:
         if crash is not None:
             # one line: loky's message names the worker's exit code on a line of its own
             error = _record_failure(run, out, f"its worker died (killed, out of memory or crashed) while running it: "
@@ -1080,8 +1100,9 @@ def run_sweep(sweep: Sweep, out: Path, runs: Sequence[Run], jobs: int = 1, sched
         if error is not None:
             failures[run] = error
         log.debug(f"  run {run.partition}: {'done' if error is None else f'failed: {error}'}")
+        finished += held[run]
         if progress is not None:
-            progress(finished, len(todo), len(failures))
+            progress(finished, total, len(failures))
     return len(todo), failures
 
 
@@ -1110,7 +1131,13 @@ _SLURM_FORMATS = {"time": (_SLURM_TIME, "a SLURM time limit: minutes, MM:SS, HH:
                                         "D-HH:MM:SS (e.g. 00:30:00), or UNLIMITED"),
                   "partition": (re.compile(rf"{_SLURM_NAME}(?:,{_SLURM_NAME})*"),
                                 "partition names (letters, digits, '_', '.', '-'; at most 128 each), comma-separated"),
-                  "account": (re.compile(_SLURM_NAME), "an account name (letters, digits, '_', '.', '-'; at most 128)")}
+                  "account": (re.compile(_SLURM_NAME), "an account name (letters, digits, '_', '.', '-'; at most 128)"),
+                  "mem": (re.compile(r"[1-9][0-9]{0,8}[KMGT]?"), "a SLURM memory size: a whole number with a unit "
+                                                                 "K, M (the default), G or T, e.g. 4G")}
+#: ``#SBATCH --mem`` of a task when ``sweep plan --mem`` is not given: a task runs its runs one after
+#: another, each bounded in size by its scenario's run limits (a few hundred MB at most), in a
+#: Python with numpy, pyarrow and numba loaded (~0.5 GB).
+DEFAULT_MEM = "2G"
 
 
 def _script_value(value: str | os.PathLike, what: str, sbatch: bool = False) -> str:
@@ -1129,7 +1156,7 @@ def _script_value(value: str | os.PathLike, what: str, sbatch: bool = False) -> 
 
 
 def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, partition: str | None = None,
-               account: str | None = None) -> str:
+               account: str | None = None, mem: str = DEFAULT_MEM) -> str:
     """A SLURM job-array script running every task of ``sweep`` into ``results``/<name>.
 
     Paths are absolute and the python is this one (``sys.executable``), so the script works
@@ -1138,10 +1165,11 @@ def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, parti
 
     Every value is quoted (``shlex.quote``: bash and sbatch take it as one literal word), and
     refused (SweepError) before anything is written if it holds a control character or a byte
-    that is not UTF-8; ``time_limit``, ``partition`` and ``account`` must have SLURM's formats
-    (see :data:`_SLURM_FORMATS`).
+    that is not UTF-8; ``time_limit``, ``partition``, ``account`` and ``mem`` (per task) must have
+    SLURM's formats (see :data:`_SLURM_FORMATS`). Without ``time_limit`` the script says that the
+    partition's default time limit applies, in a comment beside the ``#SBATCH`` lines.
     """
-    for flag, value in (("time", time_limit), ("partition", partition), ("account", account)):
+    for flag, value in (("time", time_limit), ("partition", partition), ("account", account), ("mem", mem)):
         pattern, allowed = _SLURM_FORMATS[flag]
         if value is not None and not pattern.fullmatch(value):
             raise SweepError(f"--{flag} {_shown(value)} is not {allowed}")
@@ -1153,15 +1181,18 @@ def job_script(sweep: Sweep, results: Path, time_limit: str | None = None, parti
     # in --output, % starts SLURM's file name patterns (%A job, %a task): the folder's own is %%
     logs = str(out / "_logs").replace("%", "%%") + "/%A_%a.out"
     options = [f"--job-name=dronefleet-{sweep.name}", f"--array=0-{sweep.n_tasks - 1}", "--cpus-per-task=1",
-               f"--output={shlex.quote(logs)}"]
+               f"--mem={mem}", f"--output={shlex.quote(logs)}"]
     options += [f"--{flag}={shlex.quote(value)}" for flag, value in
                 (("time", time_limit), ("partition", partition), ("account", account)) if value]
+    untimed = [] if time_limit else ["# No --time: the partition's default time limit applies to each task; "
+                                     "set one with dronefleet sweep plan --time HH:MM:SS."]
     cache = shlex.quote(str(results / "_numba_cache"))
     return "\n".join([
         f"{SCRIPT_HEAD}{sweep.name} ({shlex.quote(str(sweep.path))}):",
         f"# {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs.",
         "# Written by `dronefleet sweep plan`; submit it with `sbatch` (on its own, or with --array=<tasks>",
         "# to rerun some): a task skips its runs that are done and redoes the others.",
+        *untimed,
         *(f"#SBATCH {option}" for option in options),
         "set -euo pipefail",
         f"cd {shlex.quote(here)}",
@@ -1233,7 +1264,8 @@ def _partition_schema(sweep: Sweep):
 
     # bool: a switch such as lunar's los_bodies is a grid key like any other (partition "los_bodies=True")
     types = {float: pa.float64(), int: pa.int64(), str: pa.string(), bool: pa.bool_()}
-    return pa.schema([(key, types[type(sweep.scenario.defaults[key])]) for key in sweep.runs[0].keys])
+    scenario = sweep.scenario
+    return pa.schema([(key, types[type(scenario.defaults[config_key(scenario, key)])]) for key in sweep.runs[0].keys])
 
 
 def collect(sweep: Sweep, out: Path) -> tuple[pyarrow.Table, list[Run]]:
@@ -1354,7 +1386,7 @@ def plan_command(args: argparse.Namespace) -> int:
     sweep, out = _open(args)
     own = out / f"{sweep.name}.sbatch"
     script = Path(_script_value(args.out, "--out")) if args.out else own
-    text = job_script(sweep, Path(args.results), args.time, args.partition, args.account)
+    text = job_script(sweep, Path(args.results), args.time, args.partition, args.account, args.mem)
     if Path(os.path.abspath(script)).is_relative_to(os.path.abspath(out)) and \
             os.path.abspath(script) != os.path.abspath(own):
         raise SweepError(f"--out {str(script)!r} lies inside the dataset {str(out)!r}, whose files it would "
@@ -1366,7 +1398,8 @@ def plan_command(args: argparse.Namespace) -> int:
     with writing(script):
         write_atomic(script, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     print(f"sweep {sweep.name}: {sweep.describe()}, {sweep.n_tasks} tasks of up to {sweep.runs_per_task} runs")
-    print(f"  job-array script  {script}")
+    print(f"  job-array script  {script} (per task: 1 CPU, {args.mem} memory, "
+          f"{f'time limit {args.time}' if args.time else 'the partition default time limit'})")
     print(f"  submit it with    sbatch {shlex.quote(str(script))}")
     return 0
 
@@ -1393,7 +1426,7 @@ def run_command(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     try:
         with console.compile_notice(f"the {sweep.scenario.name} kernel"):  # with --jobs 1 its runs run here
-            ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress())
+            ran, failures = run_sweep(sweep, out, runs, jobs, args.scheduler, Progress(sweep.scenario.replicate_noun))
     except KeyboardInterrupt:
         log.warning(f"sweep {sweep.name}: interrupted; the runs done are kept: the same command goes on")
         return 130  # the shell's code for a command stopped by Ctrl-C

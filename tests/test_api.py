@@ -98,7 +98,7 @@ def files(folder):
     (["--seed", "4", "--set", "horizon_weeks=0.05", "--set", "n_uavs=5", "--set", "auction.rule=random"],
      None, {"seed": 4, "set": {"auction.rule": "random"}, **TINY["delivery"]}),
     ([str(REPLENISHMENT), "--set", "trials=2", "--set", "ticks=300", "--set", "first_trial=3"],
-     REPLENISHMENT, {"seed": 3, **TINY["replenishment"]}),
+     REPLENISHMENT, {"first_trial": 3, **TINY["replenishment"]}),
 ], ids=["delivery", "replenishment"])
 def test_a_saved_run_is_the_clis_run_folder_byte_for_byte(tmp_path, capsys, cli_args, config, changes):
     assert cli.main(["run", *cli_args, "--out", str(tmp_path / "cli")]) == 0
@@ -132,8 +132,8 @@ def test_overrides_the_seed_and_set_reach_the_config():
     assert r.summary.equals(r.tables["summary"]) and r.summary is r.summary  # converted once
 
 
-def test_a_replenishment_run_has_its_own_tables_and_seed_key():
-    r = dronefleet.run("replenishment", seed=5, strategy="fixed", n_chargers=0, **TINY["replenishment"])
+def test_a_replenishment_run_has_its_own_tables_and_trials():
+    r = dronefleet.run("replenishment", first_trial=5, strategy="fixed", n_chargers=0, **TINY["replenishment"])
     assert r.scenario.name == "replenishment" and (r.config.first_trial, r.config.params.mobile) == (5, False)
     assert set(r.tables) == {"summary", "timeseries"}
     assert r.summary.trial.tolist() == [5, 6]
@@ -154,8 +154,9 @@ def test_sweep_rows_are_the_single_runs_summaries():
 def test_a_replenishment_sweep_has_a_row_per_trial_of_each_run():
     table = dronefleet.sweep([{"strategy": ["fixed"], "n_chargers": [0]}, {"strategy": ["mobile"], "n_chargers": [2]}],
                              base=REPLENISHMENT, set=TINY["replenishment"], jobs=1)
-    assert table[["strategy", "n_chargers", "first_trial", "trial"]].values.tolist() == [
-        ["fixed", 0, 1, 1], ["fixed", 0, 1, 2], ["mobile", 2, 1, 1], ["mobile", 2, 1, 2]]
+    assert "first_trial" not in table  # no seed: a configuration is one run, told apart by the grid alone
+    assert table[["strategy", "n_chargers", "trial"]].values.tolist() == [
+        ["fixed", 0, 1], ["fixed", 0, 2], ["mobile", 2, 1], ["mobile", 2, 2]]
     single = dronefleet.run(REPLENISHMENT, strategy="mobile", n_chargers=2, **TINY["replenishment"]).summary
     pd.testing.assert_frame_equal(table[single.columns].iloc[2:].reset_index(drop=True), single)
 
@@ -200,7 +201,9 @@ def test_a_sweep_refuses_an_out_that_cannot_take_its_dataset_before_any_run(othe
     (lambda: dronefleet.run(set={"orders.tau_minutes": 20}, tau_minutes=25), r"tau_minutes is given twice"),
     (lambda: dronefleet.run(seed=1, set={"run.seed": 2}), r"seed is given twice"),
     (lambda: dronefleet.run(set={1: 2}), r"config key 1 is not a string"),
-    (lambda: dronefleet.run("replenishment", seed=0), r"run.first_trial = 0 is out of range"),
+    (lambda: dronefleet.run("replenishment", seed=0), r"^seed=0 does not apply to a replenishment run, which has "
+                                                      r"no root seed: .*first_trial \(from 1\) and trials$"),
+    (lambda: dronefleet.run("replenishment", first_trial=0), r"run.first_trial = 0 is out of range"),
     (lambda: dronefleet.sweep({}, seeds=[0]), r"\[grid\] is empty"),
     (lambda: dronefleet.sweep("rule", seeds=[0]), r"grid='rule': expected a dict of config keys to lists"),
     (lambda: dronefleet.sweep({"rule": "random"}, seeds=[0]), r"rule must be a list of values"),
@@ -209,7 +212,9 @@ def test_a_sweep_refuses_an_out_that_cannot_take_its_dataset_before_any_run(othe
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0, 0]), r"seed 0 is listed more than once"),
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], jobs=0), r"jobs=0: expected an integer >= 1"),
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], set={"rule": "random"}), r"rule is both fixed"),
-    (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], base="replenishment"), r"unknown key 'rule'"),
+    (lambda: dronefleet.sweep({"rule": ["random"]}, base="replenishment"), r"unknown key 'rule'"),
+    (lambda: dronefleet.sweep({"strategy": ["fixed"]}, seeds=[0, 1], base="replenishment"),
+     r"^seeds=\[0, 1\] does not apply to a replenishment run, which has no root seed"),
     (lambda: dronefleet.sweep({"n_uavs": [0]}, seeds=[0]), r"\[grid\] at n_uavs = 0: .*n_uavs"),
     (lambda: dronefleet.sweep({"rule": ["random"]}, seeds=[0], out=3), r"out=3: expected the path of a folder"),
     # sizes the CLI's cap refuses are refused here too, and before a list of them is built

@@ -128,10 +128,14 @@ def test_override_forms(override, key, expected):
     assert c == replace(default_config(), **{key: expected})
 
 
-def test_overrides_apply_over_file_in_order_and_seed_argument_last(tmp_path):
+def test_overrides_apply_over_file_and_a_key_given_twice_is_refused(tmp_path):
     path = write(tmp_path, "[run]\nseed = 3\n[fleet]\nn_uavs = 5\n")
-    c = load_config(path, overrides=["n_uavs=7", "fleet.n_uavs=9", "seed=4"], seed=11)
+    c = load_config(path, overrides=["fleet.n_uavs=9"], seed=11)
     assert (c.n_uavs, c.seed) == (9, 11)
+    with pytest.raises(ConfigError, match=r"^n_uavs is given twice \(as --set n_uavs=7 and as --set fleet.n_uavs=9\)"):
+        load_config(path, overrides=["n_uavs=7", "fleet.n_uavs=9"])
+    with pytest.raises(ConfigError, match=r"^seed is given twice \(as --set seed=4 and as --seed 11\)"):
+        load_config(path, overrides=["seed=4"], seed=11)
     assert load_config(path, overrides=["seed=4"]).seed == 4
     assert load_config(path).seed == 3
     assert load_config(seed=5) == replace(default_config(), seed=5)
@@ -336,7 +340,7 @@ def test_value_errors_name_their_source(tmp_path):
         load_config(path, overrides=["soh_max=0.8"])
     with pytest.raises(ConfigError, match=r"\(set in --set n_uavs=0\)"):
         load_config(overrides=["n_uavs=0"])
-    with pytest.raises(ConfigError, match=r"run.seed must be an integer.*seed argument"):
+    with pytest.raises(ConfigError, match=r"run.seed must be an integer.*--seed 1.5"):
         load_config(seed=1.5)
 
 

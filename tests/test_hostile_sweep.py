@@ -187,11 +187,9 @@ n_chargers = [1, 2]
      "n_chargers = 2"),
     (REPLENISHMENT.replace("ticks = 200", "ticks = 2.5"), "[set]: run.ticks must be an integer, got float 2.5"),
     (REPLENISHMENT.replace("trials = 2", "trials = 0"), "[set]: trials = 0 is not allowed: must be >= 1"),
-    (REPLENISHMENT.replace("trials = 2", "first_trial = 3"),
-     "[set]: first_trial cannot be set here: it is the seed key, given by [sweep] seeds"),
-    (REPLENISHMENT.replace("[set]", "seeds = [0]\n[set]"), "[sweep] seeds: run.first_trial = 0 is out of range"),
-    (REPLENISHMENT.replace("[set]", "seeds = [1, 2]\n[set]"), "first_trial = 1 and first_trial = 2 give runs that "
-                                                               "both hold replicates 2 (each run holds 2)"),
+    (REPLENISHMENT.replace("[set]", "seeds = [0]\n[set]"),
+     "[sweep] seeds does not apply to a replenishment run, which has no root seed"),
+    (REPLENISHMENT.replace("trials = 2", "first_trial = 0"), "[set]: run.first_trial = 0 is out of range"),
     (REPLENISHMENT.replace('"replenishment"', '"replenish"'),
      "[sweep] unknown scenario 'replenish' (did you mean 'replenishment'?); registered scenarios: delivery, "
      "replenishment"),
@@ -703,62 +701,62 @@ def test_collect_never_replaces_a_summary_table_it_did_not_write(tiny_done, caps
 
 # ---------------------------------------------------------------------------- one scenario per dataset
 
-#: Items and replenishment sweeps over trials have one layout: trials/first_trial.
-TRIALS = """[sweep]
+#: Items and lunar sweeps over n_robots have one layout: n_robots/root_seed.
+ROBOTS = """[sweep]
 name = "shared"
 scenario = "{scenario}"
 [set]
 {fixed}
 [grid]
-trials = [2]
+n_robots = [5]
 """
 
 
 @pytest.fixture(scope="module")
-def replenishment_dataset(tmp_path_factory):
-    """A results root holding the replenishment dataset "shared", partitioned by trials/first_trial."""
+def items_dataset(tmp_path_factory):
+    """A results root holding the items dataset "shared", partitioned by n_robots/root_seed."""
     root = tmp_path_factory.mktemp("shared")
-    (root / "replenishment.toml").write_text(TRIALS.format(scenario="replenishment", fixed="ticks = 200"))
-    (root / "items.toml").write_text(TRIALS.format(scenario="items", fixed="steps = 50"))
-    assert cli.main(["-q", "sweep", "run", str(root / "replenishment.toml"), "--results", str(root / "results"),
+    (root / "items.toml").write_text(ROBOTS.format(scenario="items", fixed="trials = 1\nsteps = 50"))
+    (root / "lunar.toml").write_text(ROBOTS.format(scenario="lunar", fixed="runs = 1\nduration_s = 20.0"))
+    assert cli.main(["-q", "sweep", "run", str(root / "items.toml"), "--results", str(root / "results"),
                      "--jobs", "1"]) == 0
     return root
 
 
 @pytest.mark.parametrize("record", ["with its scenario", "without (an older dataset)", "none (an older dataset)"])
-def test_a_sweep_of_another_scenario_never_enters_a_dataset_of_the_same_layout(replenishment_dataset, tmp_path,
+def test_a_sweep_of_another_scenario_never_enters_a_dataset_of_the_same_layout(items_dataset, tmp_path,
                                                                                 capsys, no_array, record):
     import shutil
 
-    results = shutil.copytree(replenishment_dataset / "results", tmp_path / "results")
+    results = shutil.copytree(items_dataset / "results", tmp_path / "results")
     layout = results / "shared" / "_layout.json"
-    assert json.loads(layout.read_text()) == {"keys": ["trials", "first_trial"], "scenario": "replenishment"}
+    assert json.loads(layout.read_text()) == {"keys": ["n_robots", "root_seed"], "scenario": "items"}
     if record == "without (an older dataset)":
-        layout.write_text('{"keys": ["trials", "first_trial"]}\n')
+        layout.write_text('{"keys": ["n_robots", "root_seed"]}\n')
     elif record == "none (an older dataset)":
         layout.unlink()
     before = snapshot(tmp_path)
     for command in ("run", "status", "collect"):
-        assert run_cli(["sweep", command, str(replenishment_dataset / "items.toml"), "--results", str(results)]) == 2
+        assert run_cli(["sweep", command, str(items_dataset / "lunar.toml"), "--results", str(results)]) == 2
         err = capsys.readouterr().err
         assert "Traceback" not in err and len(err.splitlines()) == 1, err
-        assert f"{results / 'shared'} holds a dataset of the 'replenishment' scenario; this sweep is of items" in err
+        assert f"{results / 'shared'} holds a dataset of the 'items' scenario; this sweep is of lunar" in err
         assert snapshot(tmp_path) == before
     # its own scenario's sweep goes on, and records the scenario in an older dataset's layout
-    assert run_cli(["sweep", "run", str(replenishment_dataset / "replenishment.toml"), "--results", str(results)]) == 0
-    assert json.loads(layout.read_text())["scenario"] == "replenishment"
+    assert run_cli(["sweep", "run", str(items_dataset / "items.toml"), "--results", str(results)]) == 0
+    assert json.loads(layout.read_text())["scenario"] == "items"
 
 
-def test_an_older_dataset_whose_scenario_cannot_be_told_is_refused_not_replaced(replenishment_dataset, tmp_path,
+def test_an_older_dataset_whose_scenario_cannot_be_told_is_refused_not_replaced(items_dataset, tmp_path,
                                                                                capsys, no_array):
     import shutil
 
-    results = shutil.copytree(replenishment_dataset / "results", tmp_path / "results")
+    results = shutil.copytree(items_dataset / "results", tmp_path / "results")
     (results / "shared" / "_layout.json").unlink()
     part = next((results / "shared" / "summary").rglob("part-0.parquet"))
     part.write_bytes(part.read_bytes()[:100])
     before = snapshot(tmp_path)
-    assert run_cli(["sweep", "run", str(replenishment_dataset / "items.toml"), "--results", str(results)]) == 2
+    assert run_cli(["sweep", "run", str(items_dataset / "lunar.toml"), "--results", str(results)]) == 2
     err = capsys.readouterr().err
     assert len(err.splitlines()) == 1 and f"cannot tell the scenario of the dataset {results / 'shared'}" in err, err
     assert snapshot(tmp_path) == before

@@ -275,20 +275,21 @@ def test_ties_go_to_the_shorter_trip_then_at_random_or_to_the_lowest_index():
 
 def test_with_an_observation_range_robots_see_locations_near_their_path():
     # home (0.5, 0.5), 1 at (0.9, 0.5), 2 at (0.7, 0.55) beside the path, 3 at (0.7, 0.9) far from it;
-    # robot 0 left home for 1 (4 steps), 2 steps done: at (0.7, 0.5). Robot 1 stands at 3.
+    # robot 0 left home for 1 (4 steps), 2 steps done at step 6: at (0.7, 0.5), due at step 8.
+    # Robot 1 stands at 3.
     pos = np.array([HOME, (0.9, 0.5), (0.7, 0.55), (0.7, 0.9)])
     travel = np.zeros((4, 4))
     k.travel_table(pos, 0.1, travel)
     assert travel[0, 1] == 4
-    node, origin, dest, left = (np.array(v) for v in ([-1, 3], [0, 0], [1, 3], [2, 0]))
+    node, origin, dest, arrive_at = (np.array(v) for v in ([-1, 3], [0, 0], [1, 3], [8, 0]))
     count = np.array([0, 7, 5, 9])
     observed, observed_at = np.zeros((1, 4)), np.zeros((1, 4))
-    k.observe_in_range(6, 0.06, pos, travel, node, origin, dest, left, False, False, k.POISSON, count,
+    k.observe_in_range(6, 0.06, pos, travel, node, origin, dest, arrive_at, False, False, k.POISSON, count,
                        np.zeros(4), observed, observed_at)
     assert observed[0].tolist() == [0, 0, 5, 9] and observed_at[0].tolist() == [0, 0, 6, 6]
     # private models (A26): each robot's own row
     observed = np.zeros((2, 4))
-    k.observe_in_range(6, 0.06, pos, travel, node, origin, dest, left, True, False, k.POISSON, count,
+    k.observe_in_range(6, 0.06, pos, travel, node, origin, dest, arrive_at, True, False, k.POISSON, count,
                        np.zeros(4), observed, np.zeros((2, 4)))
     assert observed.tolist() == [[0, 0, 5, 0], [0, 0, 0, 9]]
     # the whole run: a range changes what the robots know, hence what they do

@@ -167,6 +167,7 @@ from dronefleet import api
 
 api.run("lunar", set={"runs": 1, "n_robots": 10, "duration_s": 60.0})
 api.run("delivery", set={"horizon_weeks": 1})
+api.run("items", set={"trials": 1, "steps": 50})
 
 def holds_array(t):
     return isinstance(t, types.Array) or (isinstance(t, types.BaseTuple) and any(map(holds_array, t.types)))
@@ -192,7 +193,7 @@ def test_the_scenarios_with_borrowing_kernels_are_the_ones_checked_below():
                 pending.extend(jit._imports(module))
         if closure & lenders and name.count(".") == 2:  # dronefleet.<scenario>.<module>
             scenarios.add(name.split(".")[1])
-    assert scenarios == {"delivery", "lunar"}  # a new one: add a run of it to _BORROWED_RETURNS
+    assert scenarios == {"delivery", "items", "lunar"}  # a new one: add a run of it to _BORROWED_RETURNS
 
 
 def test_no_kernel_compiled_without_reference_counts_returns_an_array(tmp_path):

@@ -125,7 +125,7 @@ def test_the_summary_counts_runs_without_an_alignment_rather_than_printing_nan(t
     assert "0.500" in line and "(1 run without a value)" in line and "nan" not in line
     tables["summary"] = summary.set_column(column, "alignment_R", pa.array([math.nan, math.nan]))
     line = next(line for line in SCENARIO.format_summary(tables).splitlines() if "alignment R" in line)
-    assert line.split()[4] == "-" and "(2 runs without a value)" in line  # "alignment R (to recharge)  -"
+    assert line.split()[3] == "-" and "(2 runs without a value)" in line  # "alignment R [cosine]  -"
 
 
 def test_the_same_config_gives_the_same_tables(tiny_run, tmp_path):

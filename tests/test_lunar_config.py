@@ -104,7 +104,7 @@ def test_describe_and_label_name_the_configuration():
     assert "\n" not in line
     assert SCENARIO.label(config) == "HARD-RT-n50-7.5Wh-runs4-5"
     assert "options" not in SCENARIO.describe(SCENARIO.load(None))
-    assert "; run 3 (seed 0)" in SCENARIO.describe(SCENARIO.load(None, ["runs=1", "first_run=3"]))
+    assert "; run 3 (root seed 0)" in SCENARIO.describe(SCENARIO.load(None, ["runs=1", "first_run=3"]))
 
 
 def _every_key_hostile():
@@ -358,7 +358,7 @@ def test_a_switch_is_a_partition_key_of_its_own_type():
     # los_bodies, a bool, is a grid key of the E4 sweep: its dataset's partition column is a bool
     sweep = sw.load_sweep(SWEEPS / "lunar-e4.toml")
     schema = sw._partition_schema(sweep)
-    assert schema.field("los_bodies").type == pa.bool_() and schema.field("first_run").type == pa.int64()
+    assert schema.field("los_bodies").type == pa.bool_() and schema.field("root_seed").type == pa.int64()
     assert schema.field("layout").type == pa.string() and schema.field("battery_wh").type == pa.float64()
 
 

@@ -55,13 +55,15 @@ def test_scenario_contract(name, tmp_path, capsys):
     assert isinstance(scenario.figures, tuple) and "summary" in scenario.tables
     # what sweeps need: key resolution, validated replacement, values, the seed key
     defaults = scenario.load(None)
-    assert scenario.seed_key in scenario.schema and isinstance(scenario.seeds_required, bool)
+    # the root seed (None: replenishment, whose trials are its streams) and whether a sweep must list seeds
+    assert (scenario.seed_key is None or scenario.seed_key in scenario.schema) and isinstance(scenario.seeds_required,
+                                                                                              bool)
     for key, field in scenario.schema.items():
         assert scenario.resolve_key(key) == scenario.resolve_key(f"{field.section}.{key}") == key
         assert scenario.value(defaults, key) == scenario.defaults[key]
     assert scenario.replace(defaults, {}) == defaults
     with pytest.raises(ConfigError):
-        scenario.replace(defaults, {scenario.seed_key: -1})
+        scenario.replace(defaults, {scenario.seed_key or "first_trial": -1})
     # loading: the file names its scenario; defaults with no file or an empty one
     path = _config_file(tmp_path, text)
     assert scenarios.scenario_of(path) is scenario
@@ -141,9 +143,10 @@ def test_set_takes_bare_and_section_keys_with_strict_types():
 
 
 def _run(tmp_path, *sets, out="run"):
-    args = ["run", str(REPLENISHMENT), "--set", "trials=2", "--set", "ticks=300"]
-    for s in sets:
-        args += ["--set", s]
+    changes = {"trials": "2", "ticks": "300", **dict(s.split("=", 1) for s in sets)}  # each key once
+    args = ["run", str(REPLENISHMENT)]
+    for key, value in changes.items():
+        args += ["--set", f"{key}={value}"]
     assert cli.main([*args, "--out", str(tmp_path / out)]) == 0
     return tmp_path / out
 
@@ -165,8 +168,9 @@ def test_run_writes_one_summary_row_per_trial_and_the_time_series(tmp_path, caps
     assert list(last.loc[[3, 4]]) == summary["work"]  # cumulative work ends at the trial's W
     # the summary: every metric with mean, sd, min-max; the bounds beside work and efficiency
     params = Params(strategy="mobile", n_chargers=6, ticks=300, trials=2)
-    for label in ("work [points]", "total energy", "work energy", "efficiency", "efficiency with loss",
-                  "depleted workers", "depleted chargers", "shared [energy]", "lost [energy]"):
+    for label in ("work [points]", "total energy [units]", "work energy [units]", "efficiency [fraction]",
+                  "  with loss [fraction]", "depleted workers [robots]", "depleted chargers [robots]",
+                  "shared [energy units]", "lost [energy units]"):
         assert f"\n  {label}" in printed
     assert f"{constant_supply_bounds(params).work:,.0f} (W_cs)" in printed
     assert f"{constant_supply_bounds(params).efficiency:.4f} (E_cs)" in printed
@@ -289,7 +293,7 @@ def test_bounds_refuse_where_none_exists(capsys, args, why):
     (None, ["--set", "trials=1000", "--set", "ticks=100000", "--set", "sample_every=100"],
      "robot-ticks (trials 1000 x (ticks 100000 x 12 robots + 1,000 per trial's set-up)); at most 1e+09"),
     (None, ["--set", "first_trial=0"], "run.first_trial = 0 is out of range"),
-    (None, ["--seed", "3"], "--seed does not apply to replenishment"),
+    (None, ["--seed", "3"], "--seed does not apply to a replenishment run, which has no root seed"),
     (None, ["--fleet", "f.parquet"], "--fleet applies to delivery runs only"),
     ('scenario = "replenishmnt"\n', [], "unknown scenario 'replenishmnt' (did you mean 'replenishment'?); "
                                         "registered scenarios: delivery, replenishment"),

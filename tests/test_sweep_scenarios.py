@@ -46,12 +46,17 @@ def test_a_sweep_of_every_scenario_plans_runs_resumes_and_collects(name, tmp_pat
     s = sw.load_sweep(path)
     assert s.scenario is scenario and len(s.runs) == 4 and s.n_tasks == 2
     keys = s.runs[0].keys
-    assert keys[-1] == scenario.seed_key and list(keys[:-1]) == sorted(keys[:-1]) == list(s.grid)
+    # the grid's keys, sorted, then the root seed's partition (none for replenishment, which has no seed)
+    seed = () if scenario.seed_key is None else (sw.partition_name(scenario, scenario.seed_key),)
+    assert keys == (*sorted(s.grid), *seed) and list(s.grid) == sorted(s.grid)
+    assert seed != ("seed",) or not any("seed" in schema.names for schema in scenario.table_schemas().values()
+                                        if hasattr(scenario.module, "replicates"))
     assert len({run.partition for run in s.runs}) == 4
     for run in s.runs:  # the contract: key resolution, values, validated replacement
-        assert all(scenario.resolve_key(f"{scenario.schema[k].section}.{k}") == k for k in keys)
+        config_keys = [sw.config_key(scenario, k) for k in keys]
+        assert all(scenario.resolve_key(f"{scenario.schema[k].section}.{k}") == k for k in config_keys)
         assert scenario.replace(run.config, {}) == run.config
-        assert type(run.value(keys[-1])) is type(scenario.defaults[keys[-1]])
+        assert type(run.value(keys[-1])) is type(scenario.defaults[config_keys[-1]])
     results = tmp_path / "results"
     out = results / "tiny"
 
@@ -82,14 +87,14 @@ def test_a_sweep_of_every_scenario_plans_runs_resumes_and_collects(name, tmp_pat
     assert collected.column_names == [*keys, *summaries[0].column_names]
     assert collected.num_rows == sum(t.num_rows for t in summaries)
     for key in keys:
-        assert collected.schema.field(key).type == ARROW_TYPES[type(scenario.defaults[key])]
+        assert collected.schema.field(key).type == ARROW_TYPES[type(scenario.defaults[sw.config_key(scenario, key)])]
     assert collected.column(keys[-1]).to_pylist() == [run.value(keys[-1]) for run, t in zip(s.runs, summaries)
                                                       for _ in range(t.num_rows)]
     for table in scenario.tables:
         data = sw.dataset(s, out, table).to_table()
         assert data.num_rows == sum(pq.read_metadata(run.path(out, table)).num_rows for run in s.runs)
         for key in keys:
-            assert data.schema.field(key).type == ARROW_TYPES[type(scenario.defaults[key])]
+            assert data.schema.field(key).type == ARROW_TYPES[type(scenario.defaults[sw.config_key(scenario, key)])]
 
 
 # ---------------------------------------------------------------------------- [[grid]] unions
@@ -126,8 +131,8 @@ def test_grid_tables_give_the_union_of_their_products_in_file_order(tmp_path):
 
 def test_replenishment_figures_are_unions_with_the_fixed_strategy_beside_a_mobile_product():
     s = sw.load_sweep(sw.Path(__file__).resolve().parents[1] / "configs" / "sweeps" / "replenishment-fig09.toml")
-    assert s.describe() == "(1 point + 7 n_chargers x 5 charger_capacity_factor) x 1 seed = 36 runs"
-    assert s.runs[0].partition == "charger_capacity_factor=2.0/n_chargers=0/strategy=fixed/first_trial=1"
+    assert s.describe() == "(1 point + 7 n_chargers x 5 charger_capacity_factor) = 36 runs"  # no seed to count
+    assert s.runs[0].partition == "charger_capacity_factor=2.0/n_chargers=0/strategy=fixed"
     assert [(r.config.params.n_chargers, r.config.params.charger_capacity_factor) for r in s.runs[1:3]] == \
         [(1, 1.0), (1, 1.5)]
 
@@ -157,15 +162,16 @@ def test_duplicated_or_bad_grid_tables_are_refused(tmp_path, text, fragment):
 REPLENISHMENT = TINY["replenishment"]
 
 
-def test_replenishment_seeds_are_first_trials_of_disjoint_blocks(tmp_path):
+def test_replenishment_has_no_seeds_and_runs_blocks_of_trials_from_a_grid_over_first_trial(tmp_path):
     runs = sw.load_sweep(write(tmp_path, REPLENISHMENT)).runs
-    assert {(r.config.first_trial, r.config.last_trial) for r in runs} == {(1, 2)}  # no seeds: the base's trials
-    blocks = sw.load_sweep(write(tmp_path, REPLENISHMENT.replace("runs_per_task", "seeds = [1, 3]\nruns_per_task"))).runs
-    assert [(r.config.first_trial, r.partition.rsplit("/", 1)[1]) for r in blocks[:2]] == \
-        [(1, "first_trial=1"), (3, "first_trial=3")]
-    for seeds in ("[1, 2]", "{ start = 1, count = 2 }"):
-        with pytest.raises(sw.SweepError, match="first_trial = 1 and first_trial = 2 give runs that both hold "
-                                                r"replicates 2 \(each run holds 2\)"):
+    assert {(r.config.first_trial, r.config.last_trial) for r in runs} == {(1, 2)}  # the base's trials
+    blocks = sw.load_sweep(write(tmp_path, REPLENISHMENT.replace("n_chargers = [0]", "n_chargers = [0]\n"
+                                                                 "first_trial = [1, 3]"))).runs
+    assert [(r.config.first_trial, r.partition) for r in blocks[:2]] == \
+        [(1, "first_trial=1/n_chargers=0/strategy=fixed"), (3, "first_trial=3/n_chargers=0/strategy=fixed")]
+    for seeds in ("[1, 3]", "{ start = 1, count = 2 }"):  # "seed" means the root seed, which it has not
+        with pytest.raises(sw.SweepError, match=r"tiny.toml: \[sweep\] seeds does not apply to a replenishment run, "
+                                                "which has no root seed: .*choose them with first_trial"):
             sw.load_sweep(write(tmp_path, REPLENISHMENT.replace("runs_per_task", f"seeds = {seeds}\nruns_per_task")))
 
 

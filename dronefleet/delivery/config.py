@@ -53,7 +53,7 @@ from os import PathLike
 from typing import Any
 from collections.abc import Iterable, Mapping
 
-from ..config import SCENARIO_KEY, ConfigError, _name, _parse_override, _show, _suggest, read_toml
+from ..config import SCENARIO_KEY, ConfigError, _name, _show, _suggest, parse_overrides, read_toml
 from ..console import counted
 
 __all__ = [
@@ -606,7 +606,7 @@ def load_config(path: str | PathLike | None = None,
     """
     origin: dict[str, str] = {}
     # Overrides first: a malformed --set is reported even if the file is also bad.
-    parsed = [(_parse_override(o, resolve_key), o) for o in overrides]
+    parsed = parse_overrides(overrides, resolve_key, seed)
     flat: dict[str, Any] = {}
     if path is not None:
         _, document = read_toml(path)
@@ -616,12 +616,8 @@ def load_config(path: str | PathLike | None = None,
             raise ConfigError(f"config file {str(path)!r} is for scenario {_show(scenario)}; "
                               "only a delivery config is allowed here")
         flat.update(_flatten(document, str(path), origin))
-    for (name, value), text in parsed:
-        flat[name] = value
-        origin[name] = f"--set {text}"
-    if seed is not None:
-        flat["seed"] = seed
-        origin["seed"] = "seed argument"
+    for name, value, how in parsed:
+        flat[name], origin[name] = value, how
     return _build(flat, origin)
 
 

@@ -1,10 +1,11 @@
 """Benchmark of the items kernel: ``python -m dronefleet.items.bench``.
 
-Times, after compilation, one foraging configuration (GR, 10 robots, 20 random locations, Poisson,
-1000 steps) and one item-delivery configuration (GR, 10 robots, the 441-point grid, 1000 steps),
-each of ``trials`` trials in one kernel call, and prints the milliseconds per run amortised over
-the trials (median of ``repeats`` calls; the issue's targets: 0.3 ms and 5 ms), plus the other
-algorithms of each mode. Speed is measured here, never in a test.
+Times, after compilation, foraging configurations (20 random locations, 1000 steps) and
+item-delivery ones (the 441-point grid, 1000 steps), each of ``trials`` trials in one kernel call,
+and prints the milliseconds per run amortised over the trials (median of ``repeats`` calls) with
+the goal where one is set: foraging GR with Bernoulli demand, 5 robots of capacity 10, 0.1 ms;
+delivery GRIC with Poisson demand, 5 robots, 1.2 ms; and the older goals of GR with 10 robots
+(0.3 ms foraging, 5 ms delivery). Speed is measured here, never in a test.
 """
 
 import statistics
@@ -16,6 +17,8 @@ from .simulate import run_cell
 __all__ = ["CONFIGS", "TARGETS_MS", "bench_items"]
 
 CONFIGS = {
+    "foraging GR Bernoulli": Params(truth="bernoulli", algorithm="GR", trials=200),
+    "delivery GRIC 5 robots": Params(mode="delivery", algorithm="GRIC", trials=20),
     "foraging GR": Params(algorithm="GR", n_robots=10, trials=100),
     "delivery GR": Params(mode="delivery", algorithm="GR", n_robots=10, trials=20),
     "foraging R": Params(algorithm="R", n_robots=10, trials=100),
@@ -25,7 +28,7 @@ CONFIGS = {
     "delivery CAS": Params(mode="delivery", algorithm="CAS", n_robots=10, trials=20),
     "delivery R": Params(mode="delivery", algorithm="R", n_robots=10, trials=20),
 }
-TARGETS_MS = {"foraging GR": 0.3, "delivery GR": 5.0}
+TARGETS_MS = {"foraging GR Bernoulli": 0.1, "delivery GRIC 5 robots": 1.2, "foraging GR": 0.3, "delivery GR": 5.0}
 
 
 def bench_items(repeats=5, configs=None, out=print):

@@ -20,7 +20,7 @@ are the same for every algorithm, n, c and s: trials with the same index are pai
 import numpy as np
 
 from ..fpmath import exp, log
-from ..jit import njit
+from ..jit import borrowing, njit
 from ..rng import lane_u64, normal_pair, seed_stream, uniform, unit
 
 # Modes, truths, algorithms, CAS variants (the ints the Python layer passes in ``opts``).
@@ -58,6 +58,7 @@ TR_NODE, TR_DEST, TR_LEFT, TR_Y = range(4)
 
 STAY = -1
 TIE_REL = 1e-12            # A25: values within 1e-12 relative are equal
+MINUS_ONE_BITS = int(np.array(-1.0).view(np.int64))   # -1.0's bits read as an int64 (negative)
 TRAVEL_GUARD = 1e-9        # A6: ceil(D/s - 1e-9), float noise never adds a step
 POISSON_LEVELS = 4         # Poisson counts below 4 read from thresholds, in a loop that vectorises
 POISSON_CHUNK = 16.0       # Poisson(lambda) as a sum of ceil(lambda/16) inversions (exp(-16) >> underflow)
@@ -244,59 +245,82 @@ def uniform_candidate(a, m, rng, stream):
 
 
 @njit(cache=True, error_model='numpy', inline='always')
-def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, assigned, owner, leave_at, rng,
-           value, near_top):
+def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, assigned, owner, leave_at,
+           rng, value, near_top):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
 
-    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model,
-    of which the robot reads ``row``; ``earmark`` (M1,) sum of c - y_r over robots heading to each
-    node (:func:`earmark_move`; the robot itself counts only at its own node, never a candidate);
-    ``y`` (n,) payloads; ``assigned`` (n,) AS/ASTC/SF locations (0: none); ``owner`` (M1,) the
-    robot + 1 assigned to a location (0: none); ``leave_at`` (n,) SF's step to leave home; draws
-    come from ``rng[0, STREAM_ROBOT + i]``; ``value`` (M1,) float64 and ``near_top`` (M1,) int64 are scratch.
+    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model, of which the robot reads ``row``;
+    ``earmark`` (M1,) sum of c - y_r over robots heading to each node (:func:`earmark_move`; the
+    robot itself counts only at its own node, never a candidate); ``y`` (n,) payloads;
+    ``assigned`` (n,) AS/ASTC/SF locations (0: none); ``owner`` (M1,) the robot + 1 assigned to
+    a location (0: none); ``leave_at`` (n,) SF's step to leave home; draws come from
+    ``rng[0, STREAM_ROBOT + i]``; ``value`` (M1,) float64 and ``near_top`` (M1,) int64 are scratch.
     """
+    algorithm = opts[O_ALG]
+    stream = STREAM_ROBOT + i
+    if algorithm == ALG_R:
+        return decide_random(a, y[i], opts[O_CAPACITY], pars[P_PV], travel.shape[0] - 1, rng, stream)
+    if algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF:
+        return decide_assigned(t, a, opts, pars, travel, observed[row], observed_at[row], assigned[i], owner,
+                               leave_at[i], rng, stream)
+    return decide_greedy(t, a, opts, pars, travel, observed[row], observed_at[row], earmark, y[i], rng,
+                         stream, value, near_top)
+
+
+@njit(cache=True, error_model='numpy', inline='always')
+def decide_random(a, yi, capacity, p_visit, m, rng, stream):
+    """R (7.1): full, home; empty, or with probability ``p_visit``, a uniform other location; else home."""
+    if yi == capacity:
+        return 0 if a > 0 else STAY
+    if yi == 0 or uniform(rng, 0, stream) < p_visit:
+        return uniform_candidate(a, m, rng, stream)
+    return 0 if a > 0 else STAY
+
+
+@njit(cache=True, error_model='numpy', inline='always')
+def decide_assigned(t, a, opts, pars, travel, seen, seen_at, own, owner, leave_at, rng, stream):
+    """AS, ASTC and SF (7.5-7.7) for a robot assigned location ``own`` (0: none), reading its
+    model's row ``seen``, ``seen_at`` (M1,); SF leaves home at step ``leave_at``; ``owner`` (M1,)."""
+    algorithm = opts[O_ALG]
+    if a > 0:
+        return 0                         # foraged on arrival; home again
+    if own == 0:
+        return STAY                      # more robots than locations: sleeps for ever
+    if algorithm == ALG_SF:
+        return own if t >= leave_at else STAY
+    big_k, growth = pars[P_K], pars[P_LG]
+    target = 0.5 * big_k + opts[O_CAPACITY]
+    out_time = travel[0, own]
+    if predict(opts[O_TRUTH], pars[P_RATE], big_k, growth, seen[own], seen_at[own], t + out_time) >= target:
+        return own
+    if algorithm == ALG_AS:
+        return STAY
+    k = astc_wait(big_k, growth, target, seen[own], seen_at[own], t, out_time)
+    m = travel.shape[0] - 1
+    count = 0
+    for b in range(1, m + 1):
+        if owner[b] == 0 and travel[0, b] + travel[b, 0] < k:
+            count += 1
+    if count == 0:
+        return STAY
+    pick = int(uniform(rng, 0, stream) * count)
+    for b in range(1, m + 1):
+        if owner[b] == 0 and travel[0, b] + travel[b, 0] < k:
+            if pick == 0:
+                return b
+            pick -= 1
+    return STAY
+
+
+@njit(cache=True, error_model='numpy', inline='always')
+def decide_greedy(t, a, opts, pars, travel, seen, seen_at, earmark, yi, rng, stream, value, near_top):
+    """GR, GRIC and CAS (7.2-7.4): the best candidate against a baseline (A25 ties), from the
+    model's row ``seen``, ``seen_at`` (M1,); the robot carries ``yi``. See :func:`decide`."""
     algorithm = opts[O_ALG]
     capacity = opts[O_CAPACITY]
     m = travel.shape[0] - 1
-    stream = STREAM_ROBOT + i
-    yi = y[i]
     truth = opts[O_TRUTH]
     rate, big_k, growth = pars[P_RATE], pars[P_K], pars[P_LG]
-    target = 0.5 * big_k + capacity
-    if algorithm == ALG_R:
-        if yi == capacity:
-            return 0 if a > 0 else STAY
-        if yi == 0 or uniform(rng, 0, stream) < pars[P_PV]:
-            return uniform_candidate(a, m, rng, stream)
-        return 0 if a > 0 else STAY
-    if algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF:
-        if a > 0:
-            return 0                     # foraged on arrival; home again
-        own = assigned[i]
-        if own == 0:
-            return STAY                  # more robots than locations: sleeps for ever
-        if algorithm == ALG_SF:
-            return own if t >= leave_at[i] else STAY
-        out_time = travel[0, own]
-        if predict(truth, rate, big_k, growth, observed[row, own], observed_at[row, own], t + out_time) >= target:
-            return own
-        if algorithm == ALG_AS:
-            return STAY
-        k = astc_wait(big_k, growth, target, observed[row, own], observed_at[row, own], t, out_time)
-        count = 0
-        for b in range(1, m + 1):
-            if owner[b] == 0 and travel[0, b] + travel[b, 0] < k:
-                count += 1
-        if count == 0:
-            return STAY
-        pick = int(uniform(rng, 0, stream) * count)
-        for b in range(1, m + 1):
-            if owner[b] == 0 and travel[0, b] + travel[b, 0] < k:
-                if pick == 0:
-                    return b
-                pick -= 1
-        return STAY
-    # GR, GRIC, CAS: the best candidate against a baseline (A25 ties)
     if yi == capacity and a > 0:
         return 0
     variant = opts[O_CAS]
@@ -309,7 +333,7 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
     # home, which by symmetry are those to home), without branches: the compiler vectorises it.
     # The predictions get a pass of their own only where they need one (the logistic closed form)
     # or are the values (CAS max_expected); otherwise the rule's loop computes them as it goes.
-    seen, seen_at, out, back = observed[row], observed_at[row], travel[a], travel[0]
+    out, back = travel[a], travel[0]
     predicted = truth == LOGISTIC or (sweeper and variant != CAS_RATE)
     if predicted:
         for b in range(1, m + 1):
@@ -349,19 +373,16 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream, 
     robot's own node is overwritten; so is ``near_top`` (M1,) int64."""
     if a > 0:
         value[a] = -1.0                  # below every value: never the best, never tied
-    # the greatest value, in four independent running maxima (exact: max is associative)
-    top0 = top1 = top2 = top3 = -1.0
-    b = 1
-    while b + 3 <= m:
-        top0 = max(top0, value[b])
-        top1 = max(top1, value[b + 1])
-        top2 = max(top2, value[b + 2])
-        top3 = max(top3, value[b + 3])
-        b += 4
-    while b <= m:
-        top0 = max(top0, value[b])
-        b += 1
-    top = max(max(top0, top1), max(top2, top3))
+    # The greatest value, as the greatest bit pattern: non-negative doubles order as their bits
+    # read as int64 do, and every negative one (-1, -0.0) reads below them; a maximum of integers
+    # vectorises, one of doubles does not (NaN rules). Where the values differ (no positive value)
+    # the top beats no baseline (>= 0) either way.
+    bits = value.view(np.int64)
+    top_bits = MINUS_ONE_BITS
+    for b in range(1, m + 1):
+        top_bits = max(top_bits, bits[b])
+    near_top[0] = top_bits
+    top = near_top.view(np.float64)[0]
     if not greater(top, baseline):
         return fallback
     near = top * (1.0 - 4.0 * TIE_REL)   # below it no value is within TIE_REL of top
@@ -406,18 +427,19 @@ def best_of(a, m, value, baseline, fallback, travel, lowest_index, rng, stream, 
 
 
 @njit(cache=True, error_model='numpy')
-def observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, obs_real, truth, count,
+def observe_in_range(t, reach, pos, travel, node, origin, dest, arrive_at, private, obs_real, truth, count,
                      population, observed, observed_at):
     """A7 (o > 0): at the end of step t every robot observes every location within ``reach`` of
-    its position, the node it stands at or, in transit from a to b with l of t(a, b) steps left,
-    the point a + (t(a, b) - l) / t(a, b) (b - a) of its straight path."""
+    its position, the node it stands at or, in transit from a to b with l of t(a, b) steps left
+    (due at step ``arrive_at`` = t + l), the point a + (t(a, b) - l) / t(a, b) (b - a) of its
+    straight path."""
     reach2 = reach * reach
     for i in range(node.shape[0]):
         if node[i] >= 0:
             x, y = pos[node[i], 0], pos[node[i], 1]
         else:
             a, b = origin[i], dest[i]
-            done = (travel[a, b] - left[i]) / travel[a, b]
+            done = (travel[a, b] - (arrive_at[i] - t)) / travel[a, b]
             x = pos[a, 0] + done * (pos[b, 0] - pos[a, 0])
             y = pos[a, 1] + done * (pos[b, 1] - pos[a, 1])
         row = i if private else 0
@@ -470,10 +492,51 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     ``given_par`` (M1,) true parameters used when ``opts[O_DRAW_PARAMS]`` is 0. ``trace``
     (T + 1, n, 4) and ``trace_counts`` (T + 1, M1) record the first trial step by step when
     their first axis is not empty (tests, replay). ``stop`` (1,) int8: Ctrl-C, checked every step.
+    Allocates the state once; :func:`run_trial` runs each trial in it.
     """
+    n = opts[O_ROBOTS]
+    m1 = grid_pos.shape[0]
+    rows = n if opts[O_PRIVATE] != 0 else 1
+    travel = np.empty((m1, m1))     # float64: the value loops convert no integer
+    travel_table(grid_pos, pars[P_SPEED], travel)
+    world = (grid_pos.copy(), travel, given_par.copy())
+    generation = (np.zeros((4, m1), dtype=np.uint64), np.zeros((POISSON_LEVELS, m1), dtype=np.int64),
+                  np.zeros(m1, dtype=np.int64), np.ones(m1, dtype=np.int64), np.zeros(m1), np.ones(m1))
+    locations = (np.zeros(m1, dtype=np.int64), np.zeros(m1), np.zeros((rows, m1)), np.zeros((rows, m1)),
+                 np.zeros(m1), np.zeros(m1, dtype=np.int64))
+    robots = (np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64),
+              np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64),
+              np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_))
+    scratch = (np.zeros(m1), np.zeros(m1, dtype=np.int64))
+    rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
+    for tr in range(seeds.shape[0]):
+        if stop[0] != 0:
+            break
+        run_trial(opts, pars, seeds[tr], rng, world, generation, locations, robots, scratch,
+                  totals[tr], per_robot[tr], trace if tr == 0 else trace[:0], trace_counts, stop)
+
+
+@borrowing(error_model='numpy', nogil=True)
+def run_trial(opts, pars, seed, rng, world, generation, locations, robots, scratch, totals, per_robot, trace,
+              trace_counts, stop):
+    """One trial from its root ``seed``, in the state :func:`run_trials` allocated (it allocates
+    nothing, so numba counts no references: each would be an atomic operation per array at every
+    decision). ``world`` = (positions (M1, 2), travel times (M1, M1), true parameters (M1,));
+    ``generation`` = (streams (4, M1), thresholds (POISSON_LEVELS, M1), scratch draws, Poisson
+    parts, part means, their exp(-mean)) (:func:`seed_generation`); ``locations`` = (counts,
+    populations, observed (rows, M1), observed at (rows, M1), ear-marks, owners); ``robots`` =
+    (node, destination, origin, arrival step, payload, assigned location, SF sleep, SF leave step,
+    arrived) (n,) each; ``scratch`` = (values (M1,), near-top indices (M1,)). Results into
+    ``totals`` (N_TOTALS,) and ``per_robot`` (n, N_PER_ROBOT); ``trace`` as in :func:`run_trials`
+    (empty: not traced)."""
     mode, truth, algorithm = opts[O_MODE], opts[O_TRUTH], opts[O_ALG]
     steps, capacity, n = opts[O_STEPS], opts[O_CAPACITY], opts[O_ROBOTS]
-    m1 = grid_pos.shape[0]
+    pos, travel, truth_par = world
+    lanes, threshold, draws, parts, part_mean, part_exp = generation
+    count, population, observed, observed_at, earmark, owner = locations
+    node, dest, origin, arrive_at, y, assigned, sleep, leave_at, arrived = robots
+    value, near_top = scratch
+    m1 = pos.shape[0]
     m = m1 - 1
     foraging = mode == MODE_FP
     private = opts[O_PRIVATE] != 0
@@ -481,205 +544,209 @@ def run_trials(opts, pars, seeds, grid_pos, given_par, totals, per_robot, trace,
     m_min, x0, reach = pars[P_MMIN], pars[P_X0], pars[P_OBS_RANGE]
     target = 0.5 * big_k + capacity
     earmarking = algorithm == ALG_GR or algorithm == ALG_GRIC or (algorithm == ALG_CAS and opts[O_CAS_SHARED] != 0)
-    uses_assignment = algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF
-
-    rng = np.empty((1, STREAM_ROBOT + n, 4), dtype=np.uint64)
-    pos = grid_pos.copy()
-    travel = np.empty((m1, m1))     # float64: the value loops convert no integer
-    travel_table(pos, pars[P_SPEED], travel)
-    truth_par = given_par.copy()
-    lanes = np.zeros((4, m1), dtype=np.uint64)     # location j's generation stream in column j
-    # A draw's top 53 bits k give the uniform u = k / 2**53. Bernoulli: an item at j when
-    # k < ceil(p_j 2**53), i.e. u < p_j. Poisson: the inversion gives the smallest i with
-    # u <= F_i, i.e. k <= floor(F_i 2**53), so for i < POISSON_LEVELS the count is the number of
-    # levels whose threshold k exceeds; above the last one the inversion runs (rarely).
-    threshold = np.zeros((POISSON_LEVELS, m1), dtype=np.int64)
-    draws = np.zeros(m1, dtype=np.int64)
-    parts = np.ones(m1, dtype=np.int64)
-    part_mean = np.zeros(m1)
-    part_exp = np.ones(m1)
-    count = np.zeros(m1, dtype=np.int64)
-    population = np.zeros(m1)
-    rows = n if private else 1
-    observed = np.zeros((rows, m1))
-    observed_at = np.zeros((rows, m1))
-    earmark = np.zeros(m1)
-    value = np.zeros(m1)
-    near_top = np.zeros(m1, dtype=np.int64)
-    owner = np.zeros(m1, dtype=np.int64)
-    node = np.zeros(n, dtype=np.int64)
-    dest = np.zeros(n, dtype=np.int64)
-    origin = np.zeros(n, dtype=np.int64)
-    left = np.zeros(n, dtype=np.int64)
-    y = np.zeros(n, dtype=np.int64)
-    assigned = np.zeros(n, dtype=np.int64)
-    sleep = np.zeros(n, dtype=np.int64)
-    leave_at = np.zeros(n, dtype=np.int64)
-    arrived = np.zeros(n, dtype=np.bool_)
     tracing = trace.shape[0] > 0
 
-    for tr in range(seeds.shape[0]):
+    for s in range(STREAM_ROBOT + n):
+        seed_stream(rng, 0, s, seed, s)
+    draw_world(opts, pars, m, rng, pos, truth_par)
+    if opts[O_DRAW_POSITIONS]:
+        travel_table(pos, pars[P_SPEED], travel)
+    if truth != LOGISTIC:
+        seed_generation(truth, seed, truth_par, rng, lanes, threshold, parts, part_mean, part_exp)
+    count[:] = 0
+    population[:] = x0
+    observed[:, :] = x0 if truth == LOGISTIC else 0.0
+    observed_at[:, :] = 0.0
+    owner[:] = 0
+    earmark[:] = 0.0                 # every robot at home: nothing ear-marked
+    node[:] = 0
+    dest[:] = 0
+    y[:] = 0
+    assigned[:] = 0
+    sleep[:] = 0
+    leave_at[:] = 0
+    arrived[:] = False
+    generated = 0
+    served = 0
+    picked = 0
+    removed = 0.0
+    per_robot[:, :] = 0
+    totals[T_DEPARTURES:] = 0
+    if algorithm == ALG_AS or algorithm == ALG_ASTC or algorithm == ALG_SF:
+        assign_locations(min(n, m), rng, owner, assigned)
+    spare, have = 0.0, False
+    for t in range(0, steps + 1):
         if stop[0] != 0:
             break
-        for s in range(STREAM_ROBOT + n):
-            seed_stream(rng, 0, s, seeds[tr], s)
-        draw_world(opts, pars, m, rng, pos, truth_par)
-        if opts[O_DRAW_POSITIONS]:
-            travel_table(pos, pars[P_SPEED], travel)
-        if truth != LOGISTIC:
-            for j in range(1, m1):
-                seed_stream(rng, 0, STREAM_GENERATION, seeds[tr], LOCATION_KEY + j)   # (unused: scratch)
-                for w in range(4):
-                    lanes[w, j] = rng[0, STREAM_GENERATION, w]
-                if truth == BERNOULLI:
-                    threshold[0, j] = int(np.ceil(truth_par[j] * UNIT_BITS))
-                else:
-                    parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
-                    poisson_levels(parts[j], part_mean[j], part_exp[j], threshold[:, j])
-        count[:] = 0
-        population[:] = x0
-        observed[:, :] = x0 if truth == LOGISTIC else 0.0
-        observed_at[:, :] = 0.0
-        owner[:] = 0
-        earmark[:] = 0.0                 # every robot at home: nothing ear-marked
-        node[:] = 0
-        dest[:] = 0
-        y[:] = 0
-        assigned[:] = 0
-        sleep[:] = 0
-        leave_at[:] = 0
-        arrived[:] = False
-        generated = 0
-        served = 0
-        picked = 0
-        removed = 0.0
-        for col in range(T_DEPARTURES, N_TOTALS):
-            totals[tr, col] = 0
-        for i in range(n):
-            for col in range(N_PER_ROBOT):
-                per_robot[tr, i, col] = 0
-        if uses_assignment:              # A17: in id order, uniform among the locations not yet taken
-            for i in range(min(n, m)):
-                free = m - i
-                pick = int(uniform(rng, 0, STREAM_ROBOT + i) * free)
-                for j in range(1, m1):
-                    if owner[j] == 0:
-                        if pick == 0:
-                            owner[j] = i + 1
-                            assigned[i] = j
-                            break
-                        pick -= 1
-        spare, have = 0.0, False
-        for t in range(0, steps + 1):
-            if stop[0] != 0:
-                break
-            if t > 0:
-                # 1. generation, every location; Bernoulli and Poisson from each location's own
-                # stream, in loops that vectorise (the inversion only where an arrival is due)
-                if truth == BERNOULLI:
-                    generated += bernoulli_step(lanes, threshold[0], count)
-                elif truth == POISSON:
-                    generated += poisson_step(lanes, threshold, count, draws, parts, part_mean, part_exp)
-                else:
-                    for j in range(1, m1):
-                        if have:
-                            z, have = spare, False
-                        else:
-                            z, spare = normal_pair(rng, 0, STREAM_GENERATION)
-                            have = True
-                        x = population[j]
-                        x = x + (growth * x * (1.0 - x / big_k) + 0.5 * noise * noise * x) + noise * x * z
-                        population[j] = max(0.0, x)
-                # 2. movement
-                for i in range(n):
-                    if node[i] < 0:
-                        left[i] -= 1
-                        if left[i] == 0:
-                            node[i] = dest[i]
-                            arrived[i] = True
-            # 3. robots at a node, in id order: serve, observe, decide
+        if t > 0:
+            # 1. generation, every location; Bernoulli and Poisson from each location's own
+            # stream, in loops that vectorise (the inversion only where an arrival is due)
+            if truth == BERNOULLI:
+                generated += bernoulli_step(lanes, threshold[0], count)
+            elif truth == POISSON:
+                generated += poisson_step(lanes, threshold, count, draws, parts, part_mean, part_exp)
+            else:
+                spare, have = logistic_step(growth, big_k, noise, rng, population, spare, have)
+            # 2. movement: robots due at their destination arrive
             for i in range(n):
-                a = node[i]
-                if a < 0:
-                    continue
-                row = i if private else 0
-                if a == 0:
-                    if arrived[i]:
-                        per_robot[tr, i, R_TRIPS] += 1
-                        if algorithm == ALG_SF:
-                            leave_at[i] = t + sleep[i]     # A29: the arrival step is the first sleep step
-                    if foraging and not opts[O_COUNT_PICKUP]:
-                        served += y[i]
-                        per_robot[tr, i, R_ITEMS] += y[i]
-                    y[i] = 0
-                else:
-                    if arrived[i]:
-                        per_robot[tr, i, R_VISITS] += 1
-                    free = capacity - y[i]
-                    if truth == LOGISTIC:
-                        stock = np.floor(population[a])
-                        if algorithm == ALG_SF and arrived[i] and a == assigned[i]:
-                            before = sleep[i]
-                            sleep[i] = max(0, int(np.floor(sleep[i] + pars[P_KP] * (target - stock) + 0.5)))
-                            half = T_SF_UPDATES_LATE if 2 * t > steps else T_SF_UPDATES_EARLY
-                            totals[tr, half] += 1
-                            totals[tr, half + 1] += abs(sleep[i] - before)
-                        k = min(free, max(0, int(stock - m_min)))
-                        population[a] -= k
-                        removed += k
-                        seen = population[a] if opts[O_OBS_REAL] else np.floor(population[a])
-                    else:
-                        k = min(free, count[a])
-                        count[a] -= k
-                        seen = count[a]
-                    y[i] += k
-                    picked += k
-                    if earmarking:
-                        earmark[a] -= k              # its c - y_i, still ear-marked at a, shrinks
-                    if not foraging or opts[O_COUNT_PICKUP]:
-                        served += k
-                        per_robot[tr, i, R_ITEMS] += k
-                    observed[row, a] = seen
-                    observed_at[row, a] = t
-                arrived[i] = False
-                b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
-                           assigned, owner, leave_at, rng, value, near_top)
-                if b != STAY and b != a:
-                    if b > 0:
-                        totals[tr, T_DEPARTURES] += 1
-                        for j in range(n):
-                            if j != i and (node[j] == b or (node[j] < 0 and dest[j] == b)):
-                                totals[tr, T_SHARED] += 1
-                                break
-                    if earmarking:
-                        earmark_move(earmark, capacity, y[i], a, b)
-                    node[i] = -1
-                    origin[i] = a
-                    dest[i] = b
-                    left[i] = int(travel[a, b])
-            if reach > 0.0:
-                observe_in_range(t, reach, pos, travel, node, origin, dest, left, private, opts[O_OBS_REAL], truth,
-                                 count, population, observed, observed_at)
-            if tracing and tr == 0:
-                for i in range(n):
-                    trace[t, i, TR_NODE] = node[i]
-                    trace[t, i, TR_DEST] = dest[i] if node[i] < 0 else node[i]
-                    trace[t, i, TR_LEFT] = left[i] if node[i] < 0 else 0
-                    trace[t, i, TR_Y] = y[i]
-                for j in range(m1):
-                    trace_counts[t, j] = population[j] if truth == LOGISTIC else count[j]
-        if truth == LOGISTIC:            # A19: net growth of the stock, foraged included
-            stock = 0.0
-            for j in range(1, m1):
-                stock += population[j]
-            generated = int(np.floor(stock + removed - m * x0))
-        totals[tr, T_GENERATED] = generated
-        totals[tr, T_SERVED] = served
-        totals[tr, T_PICKED] = picked
-        visits = 0
-        trips = 0
+                if node[i] < 0 and arrive_at[i] == t:
+                    node[i] = dest[i]
+                    arrived[i] = True
+        # 3. robots at a node, in id order: serve, observe, decide
         for i in range(n):
-            visits += per_robot[tr, i, R_VISITS]
-            trips += per_robot[tr, i, R_TRIPS]
-        totals[tr, T_VISITS] = visits
-        totals[tr, T_TRIPS] = trips
+            a = node[i]
+            if a < 0:
+                continue
+            row = i if private else 0
+            if a == 0:
+                if arrived[i]:
+                    per_robot[i, R_TRIPS] += 1
+                    if algorithm == ALG_SF:
+                        leave_at[i] = t + sleep[i]     # A29: the arrival step is the first sleep step
+                if foraging and not opts[O_COUNT_PICKUP]:
+                    served += y[i]
+                    per_robot[i, R_ITEMS] += y[i]
+                y[i] = 0
+            else:
+                if arrived[i]:
+                    per_robot[i, R_VISITS] += 1
+                if truth == LOGISTIC and algorithm == ALG_SF and arrived[i] and a == assigned[i]:
+                    stock = np.floor(population[a])
+                    before = sleep[i]
+                    sleep[i] = max(0, int(np.floor(sleep[i] + pars[P_KP] * (target - stock) + 0.5)))
+                    half = T_SF_UPDATES_LATE if 2 * t > steps else T_SF_UPDATES_EARLY
+                    totals[half] += 1
+                    totals[half + 1] += abs(sleep[i] - before)
+                k, seen = take_at_location(truth, opts[O_OBS_REAL], a, capacity - y[i], m_min, count, population)
+                if truth == LOGISTIC:
+                    removed += k
+                y[i] += k
+                picked += k
+                if earmarking:
+                    earmark[a] -= k              # its c - y_i, still ear-marked at a, shrinks
+                if not foraging or opts[O_COUNT_PICKUP]:
+                    served += k
+                    per_robot[i, R_ITEMS] += k
+                observed[row, a] = seen
+                observed_at[row, a] = t
+            arrived[i] = False
+            b = decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y,
+                       assigned, owner, leave_at, rng, value, near_top)
+            if b != STAY and b != a:
+                if b > 0:
+                    totals[T_DEPARTURES] += 1
+                    if heading_elsewhere(i, b, node, dest):
+                        totals[T_SHARED] += 1
+                if earmarking:
+                    earmark_move(earmark, capacity, y[i], a, b)
+                node[i] = -1
+                origin[i] = a
+                dest[i] = b
+                arrive_at[i] = t + int(travel[a, b])     # one jump: no count-down per step
+        if reach > 0.0:
+            observe_in_range(t, reach, pos, travel, node, origin, dest, arrive_at, private, opts[O_OBS_REAL],
+                             truth, count, population, observed, observed_at)
+        if tracing:
+            record_step(t, node, dest, arrive_at, y, count, population, truth, trace[t], trace_counts[t])
+    if truth == LOGISTIC:            # A19: net growth of the stock, foraged included
+        stock = 0.0
+        for j in range(1, m1):
+            stock += population[j]
+        generated = int(np.floor(stock + removed - m * x0))
+    totals[T_GENERATED] = generated
+    totals[T_SERVED] = served
+    totals[T_PICKED] = picked
+    totals[T_VISITS] = per_robot[:, R_VISITS].sum()
+    totals[T_TRIPS] = per_robot[:, R_TRIPS].sum()
+
+
+@njit(cache=True, error_model='numpy')
+def heading_elsewhere(i, b, node, dest):
+    """Whether a robot other than ``i`` stands at location ``b`` or is heading to it (``node``,
+    ``dest`` (n,)): robot i's departure to b is then to a shared target."""
+    for j in range(node.shape[0]):
+        if j != i and (node[j] == b or (node[j] < 0 and dest[j] == b)):
+            return True
+    return False
+
+
+@njit(cache=True, error_model='numpy')
+def seed_generation(truth, seed, truth_par, rng, lanes, threshold, parts, part_mean, part_exp):
+    """Seed location j's Bernoulli or Poisson stream (key LOCATION_KEY + j) from the trial's root
+    ``seed`` into column j of ``lanes`` (4, M1) and set its thresholds from its true parameter
+    ``truth_par[j]``: a draw's top 53 bits k give the uniform u = k / 2**53. Bernoulli:
+    ``threshold[0, j]`` = ceil(p_j 2**53), an item when k is below it, i.e. u < p_j. Poisson: the
+    inversion gives the smallest i with u <= F_i, i.e. k <= floor(F_i 2**53), so for i <
+    POISSON_LEVELS the count is the number of levels ``threshold[:, j]`` that k exceeds; above the
+    last one the inversion runs (rarely), in ``parts[j]`` parts of mean ``part_mean[j]``,
+    ``part_exp[j]`` = exp(-part_mean[j]). ``rng``'s STREAM_GENERATION slot is the scratch."""
+    for j in range(1, lanes.shape[1]):
+        seed_stream(rng, 0, STREAM_GENERATION, seed, LOCATION_KEY + j)
+        for w in range(4):
+            lanes[w, j] = rng[0, STREAM_GENERATION, w]
+        if truth == BERNOULLI:
+            threshold[0, j] = int(np.ceil(truth_par[j] * UNIT_BITS))
+        else:
+            parts[j], part_mean[j], part_exp[j] = poisson_parts(truth_par[j])
+            poisson_levels(parts[j], part_mean[j], part_exp[j], threshold[:, j])
+
+
+@njit(cache=True, error_model='numpy')
+def assign_locations(robots, rng, owner, assigned):
+    """A17: robots 0 .. ``robots`` - 1, in id order, each take a uniform one of the locations not
+    yet taken (a draw from its own stream): ``owner`` (M1,) robot + 1 per location, ``assigned`` (n,)."""
+    m = owner.shape[0] - 1
+    for i in range(robots):
+        pick = int(uniform(rng, 0, STREAM_ROBOT + i) * (m - i))
+        for j in range(1, m + 1):
+            if owner[j] == 0:
+                if pick == 0:
+                    owner[j] = i + 1
+                    assigned[i] = j
+                    break
+                pick -= 1
+
+
+@njit(cache=True, error_model='numpy')
+def logistic_step(growth, big_k, noise, rng, population, spare, have):
+    """One step of every location's stochastic logistic growth (A14; one normal deviate each, in
+    pairs from STREAM_GENERATION, ``spare`` the second of a pair when ``have``), floored at 0.
+    Returns the new (spare, have)."""
+    for j in range(1, population.shape[0]):
+        if have:
+            z, have = spare, False
+        else:
+            z, spare = normal_pair(rng, 0, STREAM_GENERATION)
+            have = True
+        x = population[j]
+        x = x + (growth * x * (1.0 - x / big_k) + 0.5 * noise * noise * x) + noise * x * z
+        population[j] = max(0.0, x)
+    return spare, have
+
+
+@njit(cache=True, error_model='numpy')
+def take_at_location(truth, obs_real, a, free, m_min, count, population):
+    """A robot with room for ``free`` items at location ``a`` takes what it can: (items taken,
+    what it observes there after). Bernoulli/Poisson: from ``count`` (M1,) int64; logistic: whole
+    items above ``m_min`` of ``population`` (M1,), observed as is (``obs_real``) or floored."""
+    if truth == LOGISTIC:
+        k = min(free, max(0, int(np.floor(population[a]) - m_min)))
+        population[a] -= k
+        return k, population[a] if obs_real else np.floor(population[a])
+    k = min(free, count[a])
+    count[a] -= k
+    return k, np.float64(count[a])
+
+
+@njit(cache=True, error_model='numpy')
+def record_step(t, node, dest, arrive_at, y, count, population, truth, trace, trace_counts):
+    """Step ``t`` of the first trial into ``trace`` (n, 4) (node, destination, steps left, payload)
+    and ``trace_counts`` (M1,) (counts, or populations)."""
+    for i in range(node.shape[0]):
+        moving = node[i] < 0
+        trace[i, TR_NODE] = node[i]
+        trace[i, TR_DEST] = dest[i] if moving else node[i]
+        trace[i, TR_LEFT] = arrive_at[i] - t if moving else 0
+        trace[i, TR_Y] = y[i]
+    for j in range(trace_counts.shape[0]):
+        trace_counts[j] = population[j] if truth == LOGISTIC else count[j]

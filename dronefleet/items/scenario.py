@@ -17,9 +17,10 @@ default (from :data:`dronefleet.items.params.KEYS`). Types are strict as for the
 value and rule is checked in :meth:`dronefleet.items.params.Params.validate`. ``--set key=value``
 takes ``section.key`` or the bare key; ``--seed`` sets ``run.seed``.
 
-A run holds all its trials; in a sweep its seed key is ``first_trial`` (blocks of ``trials``
-trials, as replenishment). Trial k of root seed s draws every stream from s * 2**32 + k, so the
-same trial index pairs runs across algorithms and (n, c, s) cells (section 10).
+A run holds its trials ``first_trial .. first_trial + trials - 1``; ``seed`` is the root seed,
+what ``--seed``, ``dronefleet.run(seed=...)`` and a sweep's ``seeds`` set. Trial k of root seed s
+draws every stream from s * 2**32 + k, so the same trial index pairs runs across algorithms and
+(n, c, s) cells.
 
 Tables (:func:`simulate`): ``summary``, one row per trial (the columns of
 :func:`dronefleet.items.simulate.summary_columns`); ``robots``, one row per trial and robot
@@ -46,7 +47,7 @@ from .simulate import robot_columns, summary_columns
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "load",
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "REPLICATE_NOUN", "load",
            "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
            "columns", "simulate", "format_summary", "describe", "label", "replay_data", "check_replayable", "study"]
 
@@ -54,8 +55,9 @@ NAME = "items"
 TABLES = ("summary", "robots")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.items.study`).
 FIGURES: tuple[str, ...] = (*(f"items-fig{k:02d}" for k in range(1, 13)), "items-ttests", "items-verdicts")
-SEED_KEY = "first_trial"
+SEED_KEY = "seed"
 SEEDS_REQUIRED = False
+REPLICATE_NOUN = "trial"
 
 SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, allowed(name), key.doc) for name, key in KEYS.items()}
 DEFAULTS: dict = {name: key.default for name, key in KEYS.items()}
@@ -194,8 +196,12 @@ def describe(config: Config) -> str:
     world = (counted(p.locations, "random location") if p.foraging
              else f"{counted(p.n_locations, 'grid location')} (N_s {p.grid_spacing:g}, {p.grid_edge})")
     return (f"{p.mode} ({p.truth}), {world}, {p.algorithm}: {counted(p.n_robots, 'robot')}, capacity {p.capacity}, "
-            f"speed {p.speed:g}; trials {p.first_trial}-{p.first_trial + p.trials - 1} (seed {p.seed}) "
-            f"x {p.steps} steps")
+            f"speed {p.speed:g}; {_trials(p.first_trial, p.trials)} (root seed {p.seed}) x {counted(p.steps, 'step')}")
+
+
+def _trials(first: int, trials: int) -> str:
+    """``trial 3`` or ``trials 1-20``."""
+    return f"trial {first}" if trials == 1 else f"trials {first}-{first + trials - 1}"
 
 
 def label(config: Config) -> str:

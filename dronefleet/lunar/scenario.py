@@ -22,9 +22,9 @@ config is built (:func:`load`, :func:`replace`, :func:`config_from_dict`): the k
 re-checks. ``--set key=value`` takes ``section.key`` or the bare key; ``--seed`` sets
 ``run.seed``.
 
-A run holds all its runs ``first_run .. first_run + runs - 1`` (one kernel call); in a sweep its
-seed key is ``first_run`` (blocks of ``runs`` runs). Run j of every layout and capacity draws the
-same per-robot streams (spec section 13: common random numbers).
+A run holds all its runs ``first_run .. first_run + runs - 1`` (one kernel call); ``seed`` is the
+root seed, what ``--seed``, ``dronefleet.run(seed=...)`` and a sweep's ``seeds`` set. Run j of every
+layout and capacity draws the same per-robot streams (common random numbers).
 
 Tables (:func:`simulate`, columns in :func:`table_schemas`): ``summary`` (one row per run),
 ``timeseries`` (one row per run and update interval), ``trips`` (one row per trip record),
@@ -54,18 +54,19 @@ from .params import LunarParams
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "RUN_LIMITS",
-           "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config",
-           "run_size", "table_schemas", "columns", "simulate", "format_summary", "describe", "label", "replay_data",
-           "check_replayable", "study"]
+__all__ = ["NAME", "KEYS", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "REPLICATE_NOUN",
+           "RUN_LIMITS", "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict",
+           "read_config", "run_size", "table_schemas", "columns", "simulate", "format_summary", "describe", "label",
+           "replay_data", "check_replayable", "study"]
 
 NAME = "lunar"
 TABLES = ("summary", "timeseries", "trips", "snapshots", "robots", "deaths", "recharge_triggers", "beacon_costs")
 #: The study's figures in ``dronefleet reproduce`` (:mod:`dronefleet.lunar.study`).
 FIGURES: tuple[str, ...] = (*(f"lunar-fig{k:02d}" for k in (3, 4, 5, 6, 7, 8, 9, 11)), "lunar-control", "lunar-e4",
                             "lunar-e5", "lunar-verdicts")
-SEED_KEY = "first_run"
+SEED_KEY = "seed"
 SEEDS_REQUIRED = False
+REPLICATE_NOUN = "run"
 
 SCHEMA: dict[str, Field] = {name: Field(key.section, key.unit, _allowed(key), key.doc) for name, key in KEYS.items()}
 DEFAULTS: dict = {f.name: f.default for f in fields(LunarParams)}
@@ -180,7 +181,7 @@ def describe(config: Config) -> str:
     p = config
     runs = f"run {p.first_run}" if p.runs == 1 else f"runs {p.first_run}-{p.first_run + p.runs - 1}"
     return (f"{p.layout} (scale {p.layout_scale:g}), {counted(p.n_robots, 'robot')}, {p.battery_wh:g} Wh, "
-            f"v0 {p.v0:g} m/s, eps {p.eps:g}{_options(p)}; {runs} (seed {p.seed}) x {p.duration_s:g} s "
+            f"v0 {p.v0:g} m/s, eps {p.eps:g}{_options(p)}; {runs} (root seed {p.seed}) x {p.duration_s:g} s "
             f"({p.ticks:,} ticks)")
 
 
@@ -192,9 +193,9 @@ def label(config: Config) -> str:
 
 _SUMMARY_ROWS = (("resources returned [units]", "resources", ",.1f"), ("trips (unloads)", "trips", ",.1f"),
                  ("recharging interruptions", "interruptions", ",.1f"), ("charging sessions", "sessions", ",.1f"),
-                 ("deaths", "deaths", ",.2f"), ("beacons at the end", "beacons", ",.1f"),
-                 ("alignment T (to target)", "alignment_T", ".3f"), ("alignment N (to nest)", "alignment_N", ".3f"),
-                 ("alignment R (to recharge)", "alignment_R", ".3f"))
+                 ("deaths [robots]", "deaths", ",.2f"), ("beacons at the end [robots]", "beacons", ",.1f"),
+                 ("alignment T [cosine]", "alignment_T", ".3f"), ("alignment N [cosine]", "alignment_N", ".3f"),
+                 ("alignment R [cosine]", "alignment_R", ".3f"))
 
 
 def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:

@@ -17,14 +17,14 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from ..config import SCENARIO_KEY, ConfigError, Sections, _show, _suggest, with_sources
+from ..config import SCENARIO_KEY, ConfigError, Sections, _show, _suggest, seed_refusal, with_sources
 from ..console import counted
 from ..contract import Field
 from .params import BASE_CAPACITY, UPPER_LIMITS, Params
 from .simulate import TRIAL_SEED_FACTOR
 
-__all__ = ["NAME", "SCHEMA", "SECTIONS", "DEFAULTS", "MAX_FIRST_TRIAL", "Config", "load", "resolve_key", "replace",
-           "value", "replicates", "config_from_dict", "read_config", "describe", "label"]
+__all__ = ["NAME", "SCHEMA", "SECTIONS", "DEFAULTS", "MAX_FIRST_TRIAL", "NO_SEED", "Config", "load", "resolve_key",
+           "replace", "value", "replicates", "config_from_dict", "read_config", "describe", "label"]
 
 NAME = "replenishment"
 
@@ -137,6 +137,12 @@ def _build(values, origin):
 resolve_key = _SECTIONS.resolve_key
 
 
+#: Why a replenishment run takes no seed, and what chooses its trials (the end of :func:`no_seed`'s message).
+NO_SEED = (f"trial k draws from its own seed {TRIAL_SEED_FACTOR} k, so the trials are the streams; choose them with "
+           "first_trial (from 1) and trials")
+
+
+
 def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), seed: int | None = None) -> Config:
     """Read a replenishment config: defaults < file < ``overrides`` (``"key=value"``, in order).
 
@@ -149,8 +155,7 @@ def load(path: str | os.PathLike | None = None, overrides: Iterable[str] = (), s
         their own seeds: choose them with ``first_trial`` and ``trials``).
     """
     if seed is not None:
-        raise ConfigError(f"--seed does not apply to {NAME}: trial k uses seed {TRIAL_SEED_FACTOR} k; "
-                          "choose the trials with --set first_trial=K --set trials=N")
+        raise seed_refusal("--seed", NAME, NO_SEED)
     values, origin = _SECTIONS.read(DEFAULTS, path, overrides)
     return _build(values, origin)
 
@@ -187,9 +192,11 @@ def describe(config: Config) -> str:
     p = config.params
     chargers = (f"{counted(p.n_chargers, 'mobile charger')} (phi {p.charger_capacity_factor:g})" if p.mobile
                 else "fixed chargers")
+    first, last = config.first_trial, config.last_trial
+    trials = (f"trial {first} (seed {TRIAL_SEED_FACTOR * first})" if first == last else
+              f"trials {first}-{last} (trial k: seed {TRIAL_SEED_FACTOR} k)")
     return (f"{counted(p.n_workers, 'worker')}, {chargers}, r {p.work_ratio:g}, k {p.charge_rate:g}, "
-            f"lambda {p.transfer_loss:g}, trials {config.first_trial}-{config.last_trial} "
-            f"(seeds {TRIAL_SEED_FACTOR} k) x {p.ticks} ticks")
+            f"lambda {p.transfer_loss:g}, {trials} x {counted(p.ticks, 'tick')}")
 
 
 def label(config: Config) -> str:

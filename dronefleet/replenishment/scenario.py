@@ -19,11 +19,11 @@ parameters are checked in one place, :meth:`Params.validate`; this module adds
 only ``first_trial`` (trial k uses seed 876 k, so any slice of trials can run
 alone). ``--set key=value`` takes ``section.key`` or the bare key.
 
-A run holds all its trials, so in a sweep (:mod:`dronefleet.sweeps`) a configuration is one
-run: its seed key is ``first_trial``, and ``[sweep] seeds`` are optional first trials of
-blocks of ``trials`` trials (``seeds = [1, 51]`` with ``trials = 50``: trials 1-100 in two
-runs per configuration, which can be added later without redoing the first 50; blocks that
-would share a trial are refused).
+A run holds all its trials and has no root seed (``SEED_KEY`` is None): ``--seed``,
+``dronefleet.run(seed=...)`` and a sweep's ``seeds`` are refused, naming ``first_trial`` and
+``trials``, which choose the trials. In a sweep (:mod:`dronefleet.sweeps`) a configuration is
+one run; ``first_trial = [1, 51]`` in the grid with ``trials = 50`` runs trials 1-100 in two runs
+per configuration, which can be added later without redoing the first 50.
 
 Tables (:func:`simulate`): ``summary``, one row per trial (the columns of
 :func:`dronefleet.replenishment.simulate.summary_columns`); ``timeseries``, one row
@@ -48,7 +48,7 @@ from ..console import counted
 from ..contract import Column
 from .bounds import (COMMUTE_TICKS, BoundUndefinedError, bounds, constant_supply_bounds, fixed_bounds,
                      fixed_work_ceiling)
-from .config import (DEFAULTS, NAME, SCHEMA, Config, config_from_dict, describe, label, load,
+from .config import (DEFAULTS, NAME, NO_SEED, SCHEMA, Config, config_from_dict, describe, label, load,
                      read_config, replace, replicates, resolve_key, value)
 from .kernel import PHASES
 from .simulate import summary_columns
@@ -56,17 +56,19 @@ from .simulate import summary_columns
 if TYPE_CHECKING:
     import pyarrow
 
-__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "Config", "load",
-           "resolve_key", "replace", "value", "replicates", "config_from_dict", "read_config", "table_schemas",
-           "columns", "simulate", "format_summary", "describe", "label", "format_bounds", "replay_data", "study"]
+__all__ = ["NAME", "SCHEMA", "DEFAULTS", "TABLES", "FIGURES", "SEED_KEY", "SEEDS_REQUIRED", "REPLICATE_NOUN",
+           "NO_SEED", "Config", "load", "resolve_key", "replace", "value", "replicates", "config_from_dict",
+           "read_config", "table_schemas", "columns", "simulate", "format_summary", "describe", "label",
+           "format_bounds", "replay_data", "study"]
 
 TABLES = ("summary", "timeseries")
 #: Figures of ``dronefleet reproduce`` drawn from this scenario (fig09..fig12 come with
 #: dronefleet/replenishment/experiments.py).
 FIGURES: tuple[str, ...] = ("fig09", "fig10", "fig11", "fig12")
-#: A sweep's seeds are first trials; without them a configuration is one run of the base's trials.
-SEED_KEY = "first_trial"
+#: No root seed: --seed, seed= and a sweep's seeds are refused (:data:`NO_SEED` says why).
+SEED_KEY = None
 SEEDS_REQUIRED = False
+REPLICATE_NOUN = "trial"
 
 
 # ---------------------------------------------------------------- running
@@ -144,14 +146,14 @@ def simulate(config: Config) -> dict[str, pyarrow.Table]:
 # (label, column, format, which bound sits beside it: "work", "efficiency" or None)
 _SUMMARY_ROWS = (
     ("work [points]", "work", ",.1f", "work"),
-    ("total energy", "energy", ",.1f", None),
-    ("work energy", "work_energy", ",.1f", None),
-    ("efficiency", "efficiency", ".4f", "efficiency"),
-    ("efficiency with loss", "efficiency_with_loss", ".4f", "efficiency"),
-    ("depleted workers", "depleted_workers", ".2f", None),
-    ("depleted chargers", "depleted_chargers", ".2f", None),
-    ("shared [energy]", "shared", ",.1f", None),
-    ("lost [energy]", "lost", ",.1f", None),
+    ("total energy [units]", "energy", ",.1f", None),
+    ("work energy [units]", "work_energy", ",.1f", None),
+    ("efficiency [fraction]", "efficiency", ".4f", "efficiency"),
+    ("  with loss [fraction]", "efficiency_with_loss", ".4f", "efficiency"),
+    ("depleted workers [robots]", "depleted_workers", ".2f", None),
+    ("depleted chargers [robots]", "depleted_chargers", ".2f", None),
+    ("shared [energy units]", "shared", ",.1f", None),
+    ("lost [energy units]", "lost", ",.1f", None),
 )
 
 
@@ -172,7 +174,7 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         note = None
     except BoundUndefinedError as error:
         beside, note = {}, f"no bound: {error}"
-    lines = [f"  {'over ' + counted(summary.num_rows, 'trial'):<22}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
+    lines = [f"  {'over ' + counted(summary.num_rows, 'trial'):<26}{'mean':>11}{'sd':>10}{'min':>11}{'max':>11}"
              "   bound"]
     for text, column, fmt, bound in _SUMMARY_ROWS:
         x = np.array(summary.column(column).to_pylist(), dtype=np.float64)  # to_numpy imports pandas
@@ -180,7 +182,7 @@ def format_summary(tables: Mapping[str, pyarrow.Table]) -> str:
         shown = beside.get(bound, "")
         if p.mobile and column == "efficiency" and p.transfer_loss != 0:
             shown = ""
-        lines.append(f"  {text:<22}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}   {shown}"
+        lines.append(f"  {text:<26}{x.mean():>11{fmt}}{sd:>10}{x.min():>11{fmt}}{x.max():>11{fmt}}   {shown}"
                      .rstrip())
     work = np.array(summary.column("work").to_pylist(), dtype=np.float64)
     if note is None and not p.mobile and work.max() > b.work:  # docs/replenishment-model.md section 9

@@ -22,7 +22,7 @@ PI = math.pi
 #: A sweep file's head and [set] per scenario: runs of seconds, as tests/conftest.py's tiny grids.
 HEADS = {
     "delivery": 'seeds = [0, 1]\n[set]\nhorizon_weeks = 0.02\nn_uavs = 3\n',
-    "replenishment": 'scenario = "replenishment"\nseeds = [1, 3]\n[set]\ntrials = 2\nticks = 200\n',
+    "replenishment": 'scenario = "replenishment"\n[set]\ntrials = 2\nticks = 200\n',  # no root seed
     "items": 'scenario = "items"\nseeds = [1, 3]\n[set]\ntrials = 2\nsteps = 50\n',
     "lunar": 'scenario = "lunar"\nseeds = [0, 2]\n[set]\nruns = 2\nn_robots = 30\nduration_s = 60.0\n',
 }
@@ -35,9 +35,10 @@ RANGES = {
 }
 
 
-def tiny(name, design='method = "lhs"\nsamples = 2', ranges=None):
-    """A tiny design sweep of scenario ``name``: 2 points x 2 seeds (a seed of replenishment, items,
-    lunar: the first of a block of 2 trials or runs) = 4 runs by default."""
+def tiny(name, design=None, ranges=None):
+    """A tiny design sweep of scenario ``name``: by default 4 runs, 2 points x 2 root seeds (a
+    replenishment run has no root seed: 4 points)."""
+    design = design or f'method = "lhs"\nsamples = {4 if name == "replenishment" else 2}'
     return (f'[sweep]\nname = "tinydesign"\nruns_per_task = 2\n{HEADS[name]}'
             f'[design]\n{design}\n[design.ranges]\n{RANGES[name] if ranges is None else ranges}')
 
@@ -139,10 +140,10 @@ def test_points_that_round_alike_share_one_run(tmp_path):
                                                'work_ratio = [0.1, 1.0]\nn_chargers = [1, 2]\n')))
     assert len(sweep.design.points) == 4 * 6
     distinct = len(set(sweep.design.points))
-    assert len(sweep.runs) == 2 * distinct and distinct < 24
-    assert sweep.describe() == f"sobol design: 4 samples of 2 keys = 24 points ({distinct} distinct) x 2 seeds " \
-                               f"= {2 * distinct} runs"
-    assert sweep.runs[0].keys == ("n_chargers", "work_ratio", "first_trial")
+    assert len(sweep.runs) == distinct < 24
+    assert sweep.describe() == f"sobol design: 4 samples of 2 keys = 24 points ({distinct} distinct) = {distinct} runs"
+    assert sweep.runs[0].keys == ("n_chargers", "work_ratio")  # replenishment has no root seed
+    assert sw.load_sweep(write(tmp_path, tiny("items"), "items.toml")).runs[0].keys == ("capacity", "speed", "root_seed")
 
 
 # ---------------------------------------------------------------------------- bad designs
@@ -154,14 +155,13 @@ def test_points_that_round_alike_share_one_run(tmp_path):
     ('method = "lhs"\nsamples = 4', 'work_ratio = [1.0, 0.5]\n', "work_ratio = [1.0, 0.5]: low must be below high"),
     ('method = "lhs"\nsamples = 4', 'work_ratio = [1.0, 1.0]\n', "low must be below high"),
     ('method = "lhs"\nsamples = 4', 'warp_factor = [1.0, 2.0]\n', "warp_factor"),
-    ('method = "sobol"\nsamples = 32768', None, "gives 196,608 points x 2 seeds = 393,216 runs; a sweep may hold at most 100,000 runs"),
+    ('method = "sobol"\nsamples = 32768', None, "gives 196,608 points x 1 seed = 196,608 runs; a sweep may hold at most 100,000 runs"),
     ('method = "sobol"\nsamples = 100', None, "samples = 100: a sobol design takes a power of 2"),
     ('method = "lhs"\nsamples = 1', None, "samples must be an integer >= 2, got 1"),
     ('method = "lhs"\nsamples = 4\nmorris_levels = 6', None, 'morris_levels is an integer >= 2, for method = "morris" only'),
     ('method = "lhs"\nsamples = 4\nrepeats = 2', None, "unknown key 'repeats'. Allowed: method, samples"),
     ('method = "lhs"\nsamples = 4', 'n_chargers = [1.5, 3]\n', "n_chargers must be a range [low, high] of two integers"),
     ('method = "lhs"\nsamples = 4', 'strategy = ["mobile"]\n', "strategy is a word: give its levels"),
-    ('method = "lhs"\nsamples = 4', 'first_trial = [1, 9]\n', "first_trial cannot be set here: it is the seed key"),
     ('method = "lhs"\nsamples = 4', '', "ranges is empty or missing: give [design.ranges]"),
     ('method = "lhs"\nsamples = 4', 'ticks = [0, 10]\n', "ticks"),  # the scenario refuses the point's value
 ])
@@ -178,6 +178,11 @@ def test_a_grid_and_a_design_together_are_refused(tmp_path, capsys):
     path = write(tmp_path, tiny("replenishment") + "[grid]\nstrategy = [\"mobile\"]\n")
     assert cli.main(["sweep", "plan", str(path), "--results", str(tmp_path)]) == 2
     assert "give [grid] (values to combine) or [design] (ranges to sample), not both" in capsys.readouterr().err
+
+
+def test_the_root_seed_is_no_design_key(tmp_path):
+    with pytest.raises(SweepError, match="seed cannot be set here: it is the seed key, given by"):
+        sw.load_sweep(write(tmp_path, tiny("items", ranges="seed = [1, 9]\n")))
 
 
 def test_a_key_fixed_and_sampled_is_refused(tmp_path):
@@ -198,7 +203,7 @@ def test_a_design_sweep_runs_locally_as_job_array_tasks_and_on_dask_into_one_dat
     path = write(tmp_path, tiny(name))
     tables = scenarios.SCENARIOS[name].tables
     assert cli.main(["sweep", "plan", str(path), "--results", str(tmp_path / "array")]) == 0
-    assert "lhs design: 2 samples of 2 keys = 2 points" in capsys.readouterr().out
+    assert "lhs design: " in capsys.readouterr().out
     assert cli.main(["sweep", "run", str(path), "--results", str(tmp_path / "local"), "--jobs", "2"]) == 0
     for task in ("0", "1"):  # what the job array's script runs, task by task
         monkeypatch.setenv("SLURM_ARRAY_TASK_ID", task)
@@ -246,14 +251,14 @@ def test_analyze_sensitivity_prints_writes_and_draws_the_indices(tmp_path, capsy
     assert set(written["index"]) == {"mu_star", "mu", "sigma"} and set(written["metric"]) == {"energy", "efficiency"}
     star = written[written["index"] == "mu_star"]
     assert (star["ci_low"] <= star["value"]).all() and (star["value"] <= star["ci_high"]).all()
-    # the Python API gives the same table, and each point's value is its runs' mean over their seeds and trials
+    # the Python API gives the same table, and each point's value is its run's mean over its trials
     result = dronefleet.sensitivity(path, ["energy", "efficiency"], results=tmp_path, resamples=50, write=False)
     pd.testing.assert_frame_equal(result.indices, written)
     first = result.samples.iloc[0]
     runs = [r for r in sw.load_sweep(path).runs if (r.value("work_ratio"), r.value("charger_capacity_factor")) ==
             (first["work_ratio"], first["charger_capacity_factor"])]
     energy = np.concatenate([pq.read_table(run.path(out, "summary")).column("energy").to_numpy() for run in runs])
-    assert len(runs) == 2 and len(energy) == 4 and first["energy"] == pytest.approx(energy.mean())  # 2 seeds x 2 trials
+    assert len(runs) == 1 and len(energy) == 2 and first["energy"] == pytest.approx(energy.mean())  # its 2 trials
     for suffix in figstyle.FORMATS:
         assert (out / f"sensitivity.{suffix}").is_file()
     (fig,) = kept  # the paper-figure standard: a page wide for two metrics, no text below 7 pt or outside it

@@ -491,7 +491,7 @@ def _add_analyze_commands(commands):
     actions = parser.add_subparsers(dest="action", required=True)
     p = actions.add_parser("sensitivity", help="Sobol' indices (or Morris screening) of a [design] sweep's metrics",
                            description="First-, second- and total-order Sobol' indices of a sobol design, or "
-                                       "Morris's mu*, mu and sigma of a morris design, with 95%% bootstrap "
+                                       "Morris's mu*, mu and sigma of a morris design, with 95 % bootstrap "
                                        "intervals: printed, written to DIR/<name>/sensitivity.parquet and drawn "
                                        "(DIR/<name>/sensitivity.png, .pdf, .svg).")
     p.add_argument("sweep", help="sweep file (TOML) with a [design], or a shipped sweep file's name")

@@ -170,3 +170,68 @@ def heading_alignment(px, py, dx, dy, g, key):
     if n == 0.0:
         return np.nan
     return (dx * ex + dy * ey) / n
+
+
+# ------------------------------------------------------------------ the neighbour grid
+# A uniform grid of square cells over the field [0, w] x [0, h], each at least as wide as the
+# farthest range a neighbour is looked for in: every point within that range of p lies in the 3 x 3
+# cells around p's own. A cell's points are listed in ascending index (a counting sort), so a loop
+# over them visits candidates in a fixed order; callers that sum over neighbours sort what they keep.
+
+
+@njit(cache=True)
+def grid_cell(px, py, inv_cell, nx, ny):
+    """Column and row of the cell holding p, clamped to the nx x ny grid of cells 1 / ``inv_cell`` wide."""
+    cx = min(nx - 1, max(0, int(np.floor(px * inv_cell))))
+    cy = min(ny - 1, max(0, int(np.floor(py * inv_cell))))
+    return cx, cy
+
+
+@njit(cache=True)
+def fill_grid(count, px, py, status, absent, inv_cell, nx, ny, cell_of, start, items):
+    """File the points i < ``count`` whose ``status[i]`` is not ``absent`` into their cells.
+
+    ``cell_of`` (>= count,) int64: each filed point's cell (row-major); ``start`` (>= nx ny + 1,)
+    int64: the points of cell c are ``items[start[c]:start[c + 1]]``, in ascending index
+    (``items``: (>= count,) int64)."""
+    n_cells = nx * ny
+    for c in range(n_cells + 1):
+        start[c] = 0
+    for i in range(count):
+        if status[i] != absent:
+            cx, cy = grid_cell(px[i], py[i], inv_cell, nx, ny)
+            cell_of[i] = cy * nx + cx
+            start[cell_of[i]] += 1
+    for c in range(1, n_cells):
+        start[c] += start[c - 1]               # start[c]: one past the end of cell c
+    start[n_cells] = start[n_cells - 1]
+    for i in range(count - 1, -1, -1):         # from the top down: each cell fills in ascending index
+        if status[i] != absent:
+            start[cell_of[i]] -= 1
+            items[start[cell_of[i]]] = i
+
+
+@njit(cache=True)
+def grid_near(px, py, inv_cell, nx, ny, start, items, out):
+    """Write into ``out`` the points filed in the 3 x 3 cells around p (cell by cell, each in
+    ascending index) and return their number: every filed point within a cell width of p."""
+    cx, cy = grid_cell(px, py, inv_cell, nx, ny)
+    m = 0
+    for row in range(max(0, cy - 1), min(ny, cy + 2)):
+        for c in range(row * nx + max(0, cx - 1), row * nx + min(nx, cx + 2)):
+            for q in range(start[c], start[c + 1]):
+                out[m] = items[q]
+                m += 1
+    return m
+
+
+@njit(cache=True)
+def sort_ids(ids, count):
+    """Sort ``ids[:count]`` ascending in place (insertion sort: a handful of neighbours)."""
+    for a in range(1, count):
+        v = ids[a]
+        b = a - 1
+        while b >= 0 and ids[b] > v:
+            ids[b + 1] = ids[b]
+            b -= 1
+        ids[b + 1] = v

@@ -35,7 +35,7 @@ def state(n, **changes):
     for i in range(n):
         seed_stream(s.rng, 0, i, SEED, i)
     ints = ("status", "role", "mode", "role_k1", "role_k2", "blocked", "load", "s_c", "n_failed", "countdown",
-            "reg", "last_left", "tick_left", "role_left", "links", "nb_cnt", "mb_cnt", "nearest", "cell_of",
+            "reg", "last_left", "tick_left", "role_left", "links", "nb_cnt", "mb_cnt", "beacons", "nearest",
             "n_near", "here")
     for name in ints:
         setattr(s, name, np.zeros(n, dtype=np.int64))
@@ -74,10 +74,8 @@ def state(n, **changes):
     s.motion = (s.blocked, s.avoiding, s.was_avoiding, s.moved, s.kappa, s.driven)
     s.memory = (s.omega, s.bvx, s.bvy, s.bsoc, s.binit, s.weight)
     s.inbox = (s.ikey, s.idelta, s.ivx, s.ivy, s.iu)
-    inv_cell, nx, ny = k.grid_shape(pars, g)
-    s.cell_start, s.cell_items = np.zeros(nx * ny + 1, dtype=np.int64), np.zeros(n, dtype=np.int64)
-    s.sensed = (s.sx, s.sy, s.d2, s.nb_cnt, s.nb_list, s.mb_cnt, s.links, s.s_hat, s.no_r_guidance, s.nearest,
-                s.cell_of, s.cell_start, s.cell_items)
+    s.sensed = (s.sx, s.sy, s.d2, s.nb_cnt, s.nb_list, s.mb_cnt, s.beacons, s.links, s.s_hat, s.no_r_guidance,
+                s.nearest)
     s.ledger = np.zeros((n, k.N_LEDGER))
     s.ledger[:, k.LG_DIED_K] = -1.0
     s.triggers, s.n_triggers = np.empty((n, k.N_TRIGGER)), np.zeros(1, dtype=np.int64)

@@ -69,8 +69,8 @@ from ..rng import seed_stream, uniform
 from ..supervisor import take
 from .geometry import G_CORNERS, G_H, G_KIND, G_SPAWN, G_W, KIND_HARD, KIND_NONE, KIND_SOFT, NO_REGION
 from .geometry import G_CX, G_CY  # noqa: F401 (the geometry columns the tests read, as before the split)
-from .geometry import (disc_hits_quad, fill_grid, grid_near, heading_alignment, inside_quad, near_box, ray_disc,
-                       ray_segment, ray_walls, region_of, segment_blocked, segment_point_dist2, sort_ids)
+from .geometry import (disc_hits_quad, heading_alignment, inside_quad, near_box, ray_disc, ray_segment, ray_walls,
+                       region_of, segment_blocked, segment_point_dist2)
 
 # Roles (= keys for mobile roles: key F_OUT <-> region T, F_IN <-> N, R <-> R), statuses, modes.
 F_OUT, F_IN, R, B = 0, 1, 2, 3
@@ -112,8 +112,6 @@ RAY_ANGLES = np.array([0.0, PI / 8, -PI / 8, PI / 4, -PI / 4, 3 * PI / 8, -3 * P
 N_RAYS = 7
 #: "No R guidance" (section 5): |v^R| <= 1e-12 for every beacon in range.
 NO_GUIDANCE2 = 1e-24
-#: Most cells along a side of the neighbour grid (a short radio range in a large field: wider cells).
-GRID_SIDE = 64
 
 # Summary columns (per run).
 (SM_RESOURCES, SM_TRIPS, SM_INTERRUPTIONS, SM_NEST_RECHARGES, SM_SESSIONS, SM_DEATHS, SM_BEACONS,
@@ -520,25 +518,6 @@ def alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
         weighted[q] = wsum / wtotal if wtotal > 0.0 else np.nan
 
 
-@njit(cache=True)
-def ray_reach(pars):
-    """How far from a robot's centre a body's centre can lie and still meet one of its IR rays in
-    this tick [m]: the ray (r_body + d_IR), the other's radius, and the two steps of a tick."""
-    r_body = pars[P_RBODY]
-    margin = 2.0 * (pars[P_V0] * pars[P_TAU]) + 1e-9   # how far two robots can close in within a tick
-    return r_body + pars[P_IR] + r_body + margin
-
-
-@njit(cache=True)
-def grid_shape(pars, g):
-    """The neighbour grid (:mod:`dronefleet.lunar.geometry`) over the field: (1 / cell width [1/m],
-    columns, rows). A cell is at least the radio range and :func:`ray_reach` wide (a relative 1e-9
-    more, for the rounding of the positions), so the robots a link or a ray can reach lie in the
-    3 x 3 cells around a robot's own; at most GRID_SIDE cells a side."""
-    cell = max(max(pars[P_COMM_R], ray_reach(pars)) * (1.0 + 1e-9), g[G_W] / GRID_SIDE, g[G_H] / GRID_SIDE)
-    return 1.0 / cell, int(g[G_W] / cell) + 1, int(g[G_H] / cell) + 1
-
-
 # ------------------------------------------------------------------ the phases of a tick (section 11)
 # Each phase is one step of section 11 over the plain arrays of run_runs (indexed by robot id);
 # run_runs allocates them once per call and calls the phases in order every tick.
@@ -570,16 +549,15 @@ def spawn(opts, pars, g, spawned, status, x, y, energy, soc_ref, search):
 @njit(cache=True, inline='always')
 def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
                           decided, immediate, heading, memory, sensed, inbox):
-    """Step 2 (section 5): the snapshot of the end of tick k-1 (``sx``, ``sy``; the robots that exist
-    filed into the neighbour grid ``cell_of``, ``cell_start``, ``cell_items``; distances ``d2`` of the
-    mobile robots to the beacons near them), links (``nb_list``: the beacons in range of each mobile robot, ``links``), S_hat,
+    """Step 2 (section 5): the snapshot of the end of tick k-1 (``sx``, ``sy``, distances ``d2`` of the
+    mobile robots), links (``nb_list``: the beacons in range of each mobile robot, ``links``), S_hat,
     "no R guidance", the nearest beacon, and the mobile broadcasts written into the inboxes of the
     beacons in range. The robot spawned this tick (``new``) senses nothing, is not sensed, is silent.
     With ``experience = "leaving"`` a beacon takes a message only from a robot moving away from
     region(s_c): its broadcast velocity has a positive component along centre -> robot (Sec 4-1-3)."""
     _, _, pcx, pcy, mdx, mdy = heading
     omega, bvx, bvy, bsoc, binit, _ = memory
-    sx, sy, d2, nb_cnt, nb_list, mb_cnt, links, s_hat, no_r_guidance, nearest, cell_of, cell_start, cell_items = sensed
+    sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest = sensed
     ikey, idelta, ivx, ivy, iu = inbox
     comm = pars[P_COMM_R]
     comm2 = comm * comm
@@ -594,24 +572,27 @@ def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, 
     for i in range(spawned):                # a loop: a slice copy may allocate (numba's overlap check)
         sx[i] = x[i]
         sy[i] = y[i]
-    inv_cell, nx, ny = grid_shape(pars, g)
-    fill_grid(spawned, x, y, status, UNSPAWNED, inv_cell, nx, ny, cell_of, cell_start, cell_items)
     for i in range(spawned):
-        nb_cnt[i] = 0
-        mb_cnt[i] = 0
-    for i in range(spawned):
-        if status[i] != ALIVE or role[i] == B or i == new:
+        if status[i] != ALIVE or role[i] == B:
             continue                       # only mobile robots sense, link and move
         xi = x[i]
         yi = y[i]
-        near_list = nb_list[i]             # first the robots near i, then the beacons it links to
-        for q in range(grid_near(xi, yi, inv_cell, nx, ny, cell_start, cell_items, near_list)):
-            b = near_list[q]
-            if status[b] != ALIVE or role[b] != B:
-                continue
-            dx = x[b] - xi
-            dy = y[b] - yi
-            d2[i, b] = dx * dx + dy * dy
+        for j in range(spawned):
+            dx = x[j] - xi
+            dy = y[j] - yi
+            d2[i, j] = dx * dx + dy * dy
+    n_beacons = 0
+    for i in range(spawned):
+        nb_cnt[i] = 0
+        mb_cnt[i] = 0
+        if status[i] == ALIVE and role[i] == B:
+            beacons[n_beacons] = i
+            n_beacons += 1
+    for i in range(spawned):
+        if status[i] != ALIVE or role[i] == B or i == new:
+            continue
+        for q in range(n_beacons):
+            b = beacons[q]
             if d2[i, b] >= comm2:
                 continue
             if hard and min(x[i], x[b]) <= box[2] and max(x[i], x[b]) >= box[0] and \
@@ -627,10 +608,9 @@ def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, 
                         break
                 if occluded:
                     continue
-            near_list[nb_cnt[i]] = b
+            nb_list[i, nb_cnt[i]] = b
             nb_cnt[i] += 1
             mb_cnt[b] += 1
-        sort_ids(near_list, nb_cnt[i])     # in id order, as G^X sums them and the nearest ties
     for i in range(spawned):
         if status[i] != ALIVE:
             continue
@@ -691,7 +671,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
     blocked, avoiding, _, _, _, _ = motion
     omega, bvx, bvy, bsoc, binit, weight = memory
     ikey = inbox[0]
-    sx, sy, nb_cnt, s_hat, no_r_guidance = sensed[0], sensed[1], sensed[3], sensed[7], sensed[8]
+    sx, sy, nb_cnt, s_hat, no_r_guidance = sensed[0], sensed[1], sensed[3], sensed[8], sensed[9]
     last_left, voided, ledger, triggers, n_triggers = trip[0], trip[1], trip[5], trip[6], trip[7]
     n_t = opts[O_NT]
     r_max = opts[O_RMAX]
@@ -835,13 +815,13 @@ def avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode
     theta_a, theta, pcx, pcy, mdx, mdy = heading
     _, avoiding, was_avoiding, _, _, _ = motion
     sx, sy, d2 = sensed[0], sensed[1], sensed[2]
-    cell_start, cell_items = sensed[11], sensed[12]
-    inv_cell, nx, ny = grid_shape(pars, g)
     avoid_turn = opts[O_AVOID_TURN] != 0
     redecide = opts[O_REDECIDE]
     r_body = pars[P_RBODY]
     ray_len = r_body + pars[P_IR]
-    ray_reach2 = ray_reach(pars) * ray_reach(pars)
+    margin = 2.0 * (pars[P_V0] * pars[P_TAU]) + 1e-9   # how far two robots can close in within a tick
+    ray_reach = ray_len + r_body + margin
+    ray_reach2 = ray_reach * ray_reach
     field_w, field_h = g[G_W], g[G_H]
     hard = int(g[G_KIND]) == KIND_HARD
     for i in range(spawned):
@@ -857,17 +837,11 @@ def avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode
         any_hit = False
         near_wall = xi < ray_len or yi < ray_len or xi > field_w - ray_len or yi > field_h - ray_len
         near_obstacle = hard and near_box(xi, yi, ray_len, box)
-        count = 0                          # bodies a ray or this tick's step can reach (any order)
-        near_list = close[i]
-        for q in range(grid_near(xi, yi, inv_cell, nx, ny, cell_start, cell_items, near_list)):
-            j = near_list[q]
-            if j != i:
-                dx = x[j] - xi
-                dy = y[j] - yi
-                d2[i, j] = dx * dx + dy * dy
-                if d2[i, j] < ray_reach2:
-                    near_list[count] = j
-                    count += 1
+        count = 0                          # bodies a ray or this tick's step can reach
+        for j in range(spawned):
+            if d2[i, j] < ray_reach2 and j != i and status[j] != UNSPAWNED:
+                close[i, count] = j
+                count += 1
         n_near[i] = count
         for r in range(N_RAYS if i != new else 0):
             hits[r] = np.inf
@@ -997,7 +971,7 @@ def energy_and_deaths(opts, pars, g, table, spawned, sup, status, role, x, y, he
     (E stays clipped at 0) and a forager takes role R (goCharge) as a robot in role R would go on;
     either way each E reaching 0 from above counts as a depletion."""
     _, avoiding, _, moved, kappa, _ = motion
-    links = sensed[6]
+    links = sensed[7]
     acc, ledger = trip[4], trip[5]
     recorded = opts[O_DEPLETION_RECORDED] != 0
     for i in range(spawned):
@@ -1359,11 +1333,8 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     d2 = np.zeros((n, n))
     nb_cnt = np.zeros(n, dtype=np.int64)
     nb_list = np.zeros((n, n), dtype=np.int64)
-    inv_cell, nx, ny = grid_shape(pars, g)
-    cell_of = np.zeros(n, dtype=np.int64)
-    cell_start = np.zeros(nx * ny + 1, dtype=np.int64)
-    cell_items = np.zeros(n, dtype=np.int64)
     mb_cnt = np.zeros(n, dtype=np.int64)
+    beacons = np.zeros(n, dtype=np.int64)
     s_hat = np.zeros((n, 3))
     no_r_guidance = np.zeros(n, dtype=np.bool_)
     hits = np.empty(N_RAYS)
@@ -1384,7 +1355,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     motion = (blocked, avoiding, was_avoiding, moved, kappa, driven)
     memory = (omega, bvx, bvy, bsoc, binit, weight)
     inbox = (ikey, idelta, ivx, ivy, iu)
-    sensed = (sx, sy, d2, nb_cnt, nb_list, mb_cnt, links, s_hat, no_r_guidance, nearest, cell_of, cell_start, cell_items)
+    sensed = (sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest)
     trip = (last_left, voided, tick_left, role_left, acc, ledger, triggers, n_triggers)
 
     for run in range(n_runs):

@@ -35,7 +35,7 @@ def state(n, **changes):
     for i in range(n):
         seed_stream(s.rng, 0, i, SEED, i)
     ints = ("status", "role", "mode", "role_k1", "role_k2", "blocked", "load", "s_c", "n_failed", "countdown",
-            "reg", "last_left", "tick_left", "role_left", "links", "nb_cnt", "mb_cnt", "nearest",
+            "reg", "last_left", "tick_left", "role_left", "links", "nb_cnt", "mb_cnt", "beacons", "nearest",
             "n_near", "here")
     for name in ints:
         setattr(s, name, np.zeros(n, dtype=np.int64))
@@ -74,10 +74,8 @@ def state(n, **changes):
     s.motion = (s.blocked, s.avoiding, s.was_avoiding, s.moved, s.kappa, s.driven)
     s.memory = (s.omega, s.bvx, s.bvy, s.bsoc, s.binit, s.weight)
     s.inbox = (s.ikey, s.idelta, s.ivx, s.ivy, s.iu)
-    s.near_b, s.near_r = np.zeros((n, n), dtype=np.int64), np.zeros((n, n), dtype=np.int64)
-    s.near_meta, s.near_at = np.zeros((n, k.N_NEAR_META), dtype=np.int64), np.zeros((n, 2))
-    s.sensed = (s.sx, s.sy, s.d2, s.nb_cnt, s.nb_list, s.mb_cnt, s.links, s.s_hat, s.no_r_guidance, s.nearest,
-                s.near_b, s.near_r, s.near_meta, s.near_at)
+    s.sensed = (s.sx, s.sy, s.d2, s.nb_cnt, s.nb_list, s.mb_cnt, s.beacons, s.links, s.s_hat, s.no_r_guidance,
+                s.nearest)
     s.ledger = np.zeros((n, k.N_LEDGER))
     s.ledger[:, k.LG_DIED_K] = -1.0
     s.triggers, s.n_triggers = np.empty((n, k.N_TRIGGER)), np.zeros(1, dtype=np.int64)
@@ -270,7 +268,7 @@ def test_avoidance_turns_the_motion_heading_abeam_of_a_wall_ahead_and_keeps_the_
     s = state(1)
     wall_x, r_body = s.g[k.G_W], s.pars[k.P_RBODY]
     put(s, 0, wall_x - r_body - 0.01, 0.3, heading=0.0)   # the floor shortens the right rays: turn left
-    k.avoidance(s.opts, s.pars, s.g, s.box, s.ray_c, s.ray_s, 1, 1, -1, s.status, s.role, s.mode, s.x, s.y, s.immediate,
+    k.avoidance(s.opts, s.pars, s.g, s.box, s.ray_c, s.ray_s, 1, -1, s.status, s.role, s.mode, s.x, s.y, s.immediate,
                 s.heading, s.motion, s.sensed, s.hits, s.close, s.n_near)
     assert s.avoiding[0] and s.hits[0] == pytest.approx(r_body + 0.01)
     assert s.theta[0] == k.HALF_PI and s.theta_a[0] == 0.0    # the nearest hit is straight ahead

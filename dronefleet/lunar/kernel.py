@@ -112,14 +112,6 @@ RAY_ANGLES = np.array([0.0, PI / 8, -PI / 8, PI / 4, -PI / 4, 3 * PI / 8, -3 * P
 N_RAYS = 7
 #: "No R guidance" (section 5): |v^R| <= 1e-12 for every beacon in range.
 NO_GUIDANCE2 = 1e-24
-# Neighbour lists (``near_meta`` columns): a mobile robot's beacons within the radio range plus a skin
-# of BEACON_SKIN radio ranges (valid until it has moved half a skin or a robot became a beacon), and
-# its bodies within the rays' reach plus the ground two robots cover in NEAR_TICKS - 1 ticks (valid for
-# NEAR_TICKS ticks while no robot spawns). Each is listed in ascending id, as the scans over all were.
-NB_VALID, NB_COUNT, NR_UNTIL, NR_COUNT, NR_SPAWNED = range(5)
-N_NEAR_META = 5
-BEACON_SKIN = 0.5
-NEAR_TICKS = 4
 
 # Summary columns (per run).
 (SM_RESOURCES, SM_TRIPS, SM_INTERRUPTIONS, SM_NEST_RECHARGES, SM_SESSIONS, SM_DEATHS, SM_BEACONS,
@@ -526,15 +518,6 @@ def alignment(n, status, role, x, y, omega, bvx, bvy, g, out, weighted):
         weighted[q] = wsum / wtotal if wtotal > 0.0 else np.nan
 
 
-@njit(cache=True)
-def ray_reach(pars):
-    """How far from a robot's centre another's can lie and still meet one of its IR rays this tick [m]:
-    the ray (r_body + d_IR), the other's radius, and the two steps of a tick."""
-    r_body = pars[P_RBODY]
-    margin = 2.0 * (pars[P_V0] * pars[P_TAU]) + 1e-9   # how far two robots can close in within a tick
-    return r_body + pars[P_IR] + r_body + margin
-
-
 # ------------------------------------------------------------------ the phases of a tick (section 11)
 # Each phase is one step of section 11 over the plain arrays of run_runs (indexed by robot id);
 # run_runs allocates them once per call and calls the phases in order every tick.
@@ -566,21 +549,18 @@ def spawn(opts, pars, g, spawned, status, x, y, energy, soc_ref, search):
 @njit(cache=True, inline='always')
 def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, x, y, energy, s_c, soc_ref, reg,
                           decided, immediate, heading, memory, sensed, inbox):
-    """Step 2 (section 5): the snapshot of the end of tick k-1 (``sx``, ``sy``; distances ``d2`` of the
-    mobile robots to the beacons of their neighbour lists, ``near_b``, rebuilt where stale), links (``nb_list``: the beacons in range of each mobile robot, ``links``), S_hat,
+    """Step 2 (section 5): the snapshot of the end of tick k-1 (``sx``, ``sy``, distances ``d2`` of the
+    mobile robots), links (``nb_list``: the beacons in range of each mobile robot, ``links``), S_hat,
     "no R guidance", the nearest beacon, and the mobile broadcasts written into the inboxes of the
     beacons in range. The robot spawned this tick (``new``) senses nothing, is not sensed, is silent.
     With ``experience = "leaving"`` a beacon takes a message only from a robot moving away from
     region(s_c): its broadcast velocity has a positive component along centre -> robot (Sec 4-1-3)."""
     _, _, pcx, pcy, mdx, mdy = heading
     omega, bvx, bvy, bsoc, binit, _ = memory
-    sx, sy, d2, nb_cnt, nb_list, mb_cnt, links, s_hat, no_r_guidance, nearest, near_b, _, near_meta, near_at = sensed
+    sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest = sensed
     ikey, idelta, ivx, ivy, iu = inbox
     comm = pars[P_COMM_R]
     comm2 = comm * comm
-    skin = BEACON_SKIN * comm
-    list_reach2 = (comm + skin) * (comm + skin)
-    moved_far2 = (0.5 * skin) * (0.5 * skin)
     r_body = pars[P_RBODY]
     reward, lam, v0, e_cap = pars[P_REWARD], pars[P_LAMBDA], pars[P_V0], pars[P_ECAP]
     hard = int(g[G_KIND]) == KIND_HARD
@@ -593,35 +573,26 @@ def sense_and_communicate(opts, pars, g, box, spawned, new, status, role, mode, 
         sx[i] = x[i]
         sy[i] = y[i]
     for i in range(spawned):
-        nb_cnt[i] = 0
-        mb_cnt[i] = 0
-    for i in range(spawned):
-        if status[i] != ALIVE or role[i] == B or i == new:
-            continue                       # only mobile robots sense and link
+        if status[i] != ALIVE or role[i] == B:
+            continue                       # only mobile robots sense, link and move
         xi = x[i]
         yi = y[i]
-        dx = xi - near_at[i, 0]
-        dy = yi - near_at[i, 1]
-        if near_meta[i, NB_VALID] == 0 or dx * dx + dy * dy >= moved_far2:
-            count = 0                      # the beacons it may link to until it has moved skin / 2
-            for b in range(spawned):
-                if status[b] == ALIVE and role[b] == B:
-                    dx = x[b] - xi
-                    dy = y[b] - yi
-                    if dx * dx + dy * dy < list_reach2:
-                        near_b[i, count] = b
-                        count += 1
-            near_meta[i, NB_VALID] = 1
-            near_meta[i, NB_COUNT] = count
-            near_at[i, 0] = xi
-            near_at[i, 1] = yi
-        for q in range(near_meta[i, NB_COUNT]):
-            b = near_b[i, q]
-            if status[b] != ALIVE or role[b] != B:
-                continue                   # no longer a beacon
-            dx = x[b] - xi
-            dy = y[b] - yi
-            d2[i, b] = dx * dx + dy * dy
+        for j in range(spawned):
+            dx = x[j] - xi
+            dy = y[j] - yi
+            d2[i, j] = dx * dx + dy * dy
+    n_beacons = 0
+    for i in range(spawned):
+        nb_cnt[i] = 0
+        mb_cnt[i] = 0
+        if status[i] == ALIVE and role[i] == B:
+            beacons[n_beacons] = i
+            n_beacons += 1
+    for i in range(spawned):
+        if status[i] != ALIVE or role[i] == B or i == new:
+            continue
+        for q in range(n_beacons):
+            b = beacons[q]
             if d2[i, b] >= comm2:
                 continue
             if hard and min(x[i], x[b]) <= box[2] and max(x[i], x[b]) >= box[0] and \
@@ -700,7 +671,7 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
     blocked, avoiding, _, _, _, _ = motion
     omega, bvx, bvy, bsoc, binit, weight = memory
     ikey = inbox[0]
-    sx, sy, nb_cnt, s_hat, no_r_guidance, near_meta = sensed[0], sensed[1], sensed[3], sensed[7], sensed[8], sensed[12]
+    sx, sy, nb_cnt, s_hat, no_r_guidance = sensed[0], sensed[1], sensed[3], sensed[8], sensed[9]
     last_left, voided, ledger, triggers, n_triggers = trip[0], trip[1], trip[5], trip[6], trip[7]
     n_t = opts[O_NT]
     r_max = opts[O_RMAX]
@@ -738,8 +709,6 @@ def roles_and_region_actions(opts, pars, table, k, spawned, sup, status, role, m
             mode[i] = NORMAL
         if row == 1:
             become_beacon(i, n_t, countdown, last_left, voided, omega, bvx, bvy, bsoc, binit, weight, ikey)
-            for j in range(spawned):       # a beacon more: every robot's list of beacons is stale
-                near_meta[j, NB_VALID] = 0
             avoiding[i] = False
             blocked[i] = 0
             immediate[i] = False
@@ -836,7 +805,7 @@ def heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt
 
 
 @njit(cache=True, inline='always')
-def avoidance(opts, pars, g, box, ray_c, ray_s, k, spawned, new, status, role, mode, x, y, immediate, heading, motion,
+def avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading, motion,
               sensed, hits, close, n_near):
     """Step 5, first half (7.4): for each robot about to translate, theta <- theta_a and the 7 IR
     rays of length r_body + d_IR against the walls, the hard obstacle and the snapshot's bodies; a hit
@@ -845,14 +814,14 @@ def avoidance(opts, pars, g, box, ray_c, ray_s, k, spawned, new, status, role, m
     bodies within reach of a ray or a step (``close[i, :n_near[i]]``)."""
     theta_a, theta, pcx, pcy, mdx, mdy = heading
     _, avoiding, was_avoiding, _, _, _ = motion
-    sx, sy, d2, near_r, near_meta = sensed[0], sensed[1], sensed[2], sensed[11], sensed[12]
+    sx, sy, d2 = sensed[0], sensed[1], sensed[2]
     avoid_turn = opts[O_AVOID_TURN] != 0
     redecide = opts[O_REDECIDE]
     r_body = pars[P_RBODY]
     ray_len = r_body + pars[P_IR]
-    ray_reach2 = ray_reach(pars) * ray_reach(pars)
-    list_reach = ray_reach(pars) + 2.0 * (NEAR_TICKS - 1) * (pars[P_V0] * pars[P_TAU]) * (1.0 + 1e-6) + 1e-9
-    list_reach2 = list_reach * list_reach
+    margin = 2.0 * (pars[P_V0] * pars[P_TAU]) + 1e-9   # how far two robots can close in within a tick
+    ray_reach = ray_len + r_body + margin
+    ray_reach2 = ray_reach * ray_reach
     field_w, field_h = g[G_W], g[G_H]
     hard = int(g[G_KIND]) == KIND_HARD
     for i in range(spawned):
@@ -868,25 +837,9 @@ def avoidance(opts, pars, g, box, ray_c, ray_s, k, spawned, new, status, role, m
         any_hit = False
         near_wall = xi < ray_len or yi < ray_len or xi > field_w - ray_len or yi > field_h - ray_len
         near_obstacle = hard and near_box(xi, yi, ray_len, box)
-        if k > near_meta[i, NR_UNTIL] or near_meta[i, NR_SPAWNED] != spawned:
-            count = 0                      # the bodies that may come within reach in NEAR_TICKS ticks
-            for j in range(spawned):
-                if j != i and status[j] != UNSPAWNED:
-                    dx = x[j] - xi
-                    dy = y[j] - yi
-                    if dx * dx + dy * dy < list_reach2:
-                        near_r[i, count] = j
-                        count += 1
-            near_meta[i, NR_COUNT] = count
-            near_meta[i, NR_UNTIL] = k + NEAR_TICKS - 1
-            near_meta[i, NR_SPAWNED] = spawned
         count = 0                          # bodies a ray or this tick's step can reach
-        for q in range(near_meta[i, NR_COUNT]):
-            j = near_r[i, q]
-            dx = x[j] - xi
-            dy = y[j] - yi
-            d2[i, j] = dx * dx + dy * dy
-            if d2[i, j] < ray_reach2:
+        for j in range(spawned):
+            if d2[i, j] < ray_reach2 and j != i and status[j] != UNSPAWNED:
                 close[i, count] = j
                 count += 1
         n_near[i] = count
@@ -1018,7 +971,7 @@ def energy_and_deaths(opts, pars, g, table, spawned, sup, status, role, x, y, he
     (E stays clipped at 0) and a forager takes role R (goCharge) as a robot in role R would go on;
     either way each E reaching 0 from above counts as a depletion."""
     _, avoiding, _, moved, kappa, _ = motion
-    links = sensed[6]
+    links = sensed[7]
     acc, ledger = trip[4], trip[5]
     recorded = opts[O_DEPLETION_RECORDED] != 0
     for i in range(spawned):
@@ -1239,7 +1192,7 @@ def run_ticks(opts, pars, g, box, ray_c, ray_s, table, stop, rng, run, run_id, f
                                  heading, motion, memory, inbox, sensed, trip, row_counts, t_first, tally)
         heading_decisions(opts, pars, rng, spawned, status, role, mode, n_failed, bt_budget, bt_travel, immediate,
                           countdown, search, s_c, visited_r, decided, heading, memory, sensed, motion)
-        avoidance(opts, pars, g, box, ray_c, ray_s, k, spawned, new, status, role, mode, x, y, immediate, heading,
+        avoidance(opts, pars, g, box, ray_c, ray_s, spawned, new, status, role, mode, x, y, immediate, heading,
                   motion, sensed, hits, close, n_near)
         translation(opts, pars, g, box, rng, spawned, status, role, mode, x, y, immediate, search, rc_travel,
                     bt_travel, bt_budget, heading, motion, sensed, trip, close, n_near)
@@ -1381,10 +1334,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     nb_cnt = np.zeros(n, dtype=np.int64)
     nb_list = np.zeros((n, n), dtype=np.int64)
     mb_cnt = np.zeros(n, dtype=np.int64)
-    near_b = np.zeros((n, n), dtype=np.int64)
-    near_r = np.zeros((n, n), dtype=np.int64)
-    near_meta = np.zeros((n, N_NEAR_META), dtype=np.int64)
-    near_at = np.zeros((n, 2))
+    beacons = np.zeros(n, dtype=np.int64)
     s_hat = np.zeros((n, 3))
     no_r_guidance = np.zeros(n, dtype=np.bool_)
     hits = np.empty(N_RAYS)
@@ -1405,8 +1355,7 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
     motion = (blocked, avoiding, was_avoiding, moved, kappa, driven)
     memory = (omega, bvx, bvy, bsoc, binit, weight)
     inbox = (ikey, idelta, ivx, ivy, iu)
-    sensed = (sx, sy, d2, nb_cnt, nb_list, mb_cnt, links, s_hat, no_r_guidance, nearest, near_b, near_r, near_meta,
-              near_at)
+    sensed = (sx, sy, d2, nb_cnt, nb_list, mb_cnt, beacons, links, s_hat, no_r_guidance, nearest)
     trip = (last_left, voided, tick_left, role_left, acc, ledger, triggers, n_triggers)
 
     for run in range(n_runs):
@@ -1464,7 +1413,6 @@ def run_runs(opts, pars, g, seeds, runs, table, start, stop):
         binit[:] = False
         weight[:] = 0.0
         ikey[:] = -1
-        near_meta[:] = 0                  # every neighbour list stale
         row_counts[:] = 0
         f_hist[:] = 0
         nb_hist[:] = 0

@@ -286,7 +286,8 @@ def contained(function: Callable[[Item], Result], item: Item) -> Result:
         else:  # Ctrl-C or SIGTERM here while the item runs: a plugin that ignores them must not hold us
             for process in workers:
                 with contextlib.suppress(ProcessLookupError):
-                    process.kill()  # SIGKILL; TerminateProcess where there are no signals
+                    # SIGKILL; where there is none (Windows) os.kill's SIGTERM is TerminateProcess
+                    os.kill(process.pid, getattr(signal, "SIGKILL", signal.SIGTERM))
             pool.shutdown(wait=False)
         raise
     _release(pool)

@@ -154,7 +154,7 @@ def _refused(capsys, argv, fragment):
 
 def test_usage_errors_are_one_line(capsys):
     _refused(capsys, ["run", "--seed", "1e3"], "argument --seed: invalid int value: '1e3' (see dronefleet run --help)")
-    _refused(capsys, ["reproduce", "fig99"], "invalid choice: 'fig99'")
+    _refused(capsys, ["reproduce", "fig99"], "'fig99' is not a figure (did you mean 'fig19'?)")
 
 
 @pytest.mark.parametrize("argv", [["run", "--out", ""], ["run", "--fleet", ""], ["run", "--save-fleet", ""],

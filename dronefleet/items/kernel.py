@@ -249,7 +249,8 @@ def decide(i, t, a, opts, pars, travel, observed, observed_at, row, earmark, y, 
            rng, value, near_top):
     """Where robot ``i``, at node ``a`` at step ``t``, goes next: a node, or STAY (section 7).
 
-    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model, of which the robot reads ``row``;
+    ``travel`` (M1, M1) travel times; ``observed``, ``observed_at`` (rows, M1) the world model, of
+    which the robot reads ``row``;
     ``earmark`` (M1,) sum of c - y_r over robots heading to each node (:func:`earmark_move`; the
     robot itself counts only at its own node, never a candidate); ``y`` (n,) payloads;
     ``assigned`` (n,) AS/ASTC/SF locations (0: none); ``owner`` (M1,) the robot + 1 assigned to

@@ -6,16 +6,18 @@ delivery (:mod:`dronefleet.delivery`, docs/delivery-model.md) and energy repleni
 :mod:`dronefleet.sweeps`.
 
 From Python: ``dronefleet.run(...)`` simulates one run, ``dronefleet.sweep(grid, ...)`` a
-grid of runs, of any scenario (:mod:`dronefleet.api`).
+grid of runs, of any scenario (:mod:`dronefleet.api`); ``dronefleet.sensitivity(sweep, metrics)``
+the sensitivity indices of a sampled design's runs (:mod:`dronefleet.analyze`).
 """
 
 from typing import TYPE_CHECKING, Any
 
 from .provenance import __version__
 
-__all__ = ["Run", "__version__", "run", "sweep"]
+__all__ = ["Run", "__version__", "run", "sensitivity", "sweep"]
 
 if TYPE_CHECKING:
+    from .analyze import sensitivity
     from .api import Run, run, sweep
 
 
@@ -26,4 +28,8 @@ def __getattr__(name: str) -> Any:
         from . import api
 
         return getattr(api, name)
+    if name == "sensitivity":
+        from .analyze import sensitivity
+
+        return sensitivity
     raise AttributeError(f"module 'dronefleet' has no attribute {name!r}")

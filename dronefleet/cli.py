@@ -1,6 +1,7 @@
 """Command line: ``dronefleet run [CONFIG] [--set key=value ...] [--seed N] [--out DIR]
 [--overwrite] [--fleet FILE] [--save-fleet FILE]``; ``dronefleet bounds [CONFIG] [--set key=value ...]``;
-``dronefleet configs``; ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet reproduce
+``dronefleet configs``; ``dronefleet sweep plan|run|status|collect SWEEP``; ``dronefleet analyze
+sensitivity SWEEP --metric M``; ``dronefleet reproduce
 FIGURE...|all [--quick]``, ``--list``; ``dronefleet replay RUN_DIR|DATASET [--run KEY=VALUE ...] [--out FILE.html]
 [--trial K]``.
 Four scenarios: delivery (UAV delivery with auctions and online learning), replenishment (energy
@@ -22,7 +23,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from . import console, provenance, scenarios, sweeps
+from . import analyze, console, provenance, scenarios, sweeps
 from .config import (SHIPPED_FOLDERS, ConfigError, _show, _suggest, check_numba_cache_dir, named_file,
                      shipped_config, shipped_files)
 from .delivery.config import SECONDS_PER_WEEK, load_config
@@ -414,6 +415,7 @@ def build_parser(reproduce_arguments: bool = True) -> argparse.ArgumentParser:
     p.add_argument("--overwrite", action="store_true", help="replace the CSV files of an earlier export in --out")
     p.set_defaults(func=export_command)
     _add_sweep_commands(commands)
+    _add_analyze_commands(commands)
     _add_reproduce_command(commands, reproduce_arguments)
     return parser
 
@@ -480,6 +482,26 @@ def _add_sweep_commands(commands):
     p = actions.add_parser("collect", parents=[common],
                            help="one summary table, a row per run, as DIR/<name>/collected.parquet")
     p.set_defaults(func=sweeps.collect_command)
+
+
+def _add_analyze_commands(commands):
+    """``dronefleet analyze sensitivity SWEEP --metric M ...``; the work is in :mod:`dronefleet.analyze`."""
+    parser = commands.add_parser("analyze", help="analyses of a sweep's dataset: sensitivity indices of a design",
+                                 description="See docs/guide/sweeps.md, section Designs.")
+    actions = parser.add_subparsers(dest="action", required=True)
+    p = actions.add_parser("sensitivity", help="Sobol' indices (or Morris screening) of a [design] sweep's metrics",
+                           description="First-, second- and total-order Sobol' indices of a sobol design, or "
+                                       "Morris's mu*, mu and sigma of a morris design, with 95 % bootstrap "
+                                       "intervals: printed, written to DIR/<name>/sensitivity.parquet and drawn "
+                                       "(DIR/<name>/sensitivity.png, .pdf, .svg).")
+    p.add_argument("sweep", help="sweep file (TOML) with a [design], or a shipped sweep file's name")
+    p.add_argument("--metric", action="append", required=True, metavar="M",
+                   help="a numeric column of the scenario's summary table, e.g. delivered; repeat for more")
+    p.add_argument("--results", type=_path, default="results", metavar="DIR",
+                   help="results root; the sweep's dataset is DIR/<name>/ (default: results)")
+    p.add_argument("--resamples", type=_at_least(10), default=analyze.RESAMPLES, metavar="N",
+                   help=f"bootstrap resamples of the intervals (default: {analyze.RESAMPLES})")
+    p.set_defaults(func=analyze.command)
 
 
 def _add_reproduce_command(commands, arguments):

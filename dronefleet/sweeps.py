@@ -58,12 +58,17 @@ so the author's order is the run order. A configuration given twice is refused. 
 enumerated in that order, the last key varying fastest and seeds innermost. Task ``k`` of a
 job array (0-based) holds runs ``[k * runs_per_task, (k + 1) * runs_per_task)``.
 
+``[design]``, in place of ``[grid]``, samples points from ranges of keys (:mod:`dronefleet.designs`):
+each distinct point is a run like a grid cell (its keys, sorted, are the partition keys), in
+sample order, seeds innermost.
+
 The dataset of a sweep, under ``<results>/<name>/``::
 
     <table>/<key>=<value>/.../<seed key>=<N>/part-0.parquet   one file per run and table
     _failed/<run id>.json                               runs that raised or whose worker died, with the error
     _layout.json                                        the partition keys and scenario: a sweep of others is refused
     collected.parquet                                   `sweep collect`: each run's summary rows
+    samples.parquet                                     a [design]'s points, in sample order (`sweep run`)
     <name>.sbatch, _logs/                               `sweep plan`: job-array script, its logs
 
 ``<table>`` is each of the scenario's tables (delivery: ``orders, attempts, fleet,
@@ -118,7 +123,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from urllib.parse import quote, unquote
 
-from . import console, scenarios
+from . import console, designs, scenarios
 from .config import SCENARIO_KEY, ConfigError, SweepError, _show, check_depth, named_file, one_line, read_toml
 from .datafiles import DataError, check_columns, parquet_rows, parquet_schema, parse_json, read_json, read_parquet
 from .outputs import PROBE_PREFIX, OutputError, check_output_file, probe_folders, writing
@@ -144,7 +149,7 @@ MAX_RUNS = 100_000
 #: Longest sweep name: it names a folder and its job-array script (file names hold 255 bytes).
 MAX_NAME = 100
 
-_SECTIONS = ("sweep", "set", "grid")
+_SECTIONS = ("sweep", "set", "grid", "design")
 _SWEEP_KEYS = ("name", "base", "seeds", "runs_per_task", SCENARIO_KEY)
 _SEED_RANGE_KEYS = ("start", "count")
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*")
@@ -216,6 +221,7 @@ class Sweep:
     runs_per_task: int
     runs: tuple[Run, ...]             # in task order
     text: str                         # the file's content, kept in collected.parquet
+    design: designs.Design | None = None  # a [design] sweep's sampled points (its products are then empty)
 
     @property
     def n_tasks(self) -> int:
@@ -231,8 +237,12 @@ class Sweep:
     def describe(self) -> str:
         """``3 rule x 6 tau_minutes x 20 seeds = 360 runs``; with ``[[grid]]``, the products summed:
         ``(9 work_ratio + 9 work_ratio) x 1 seed = 18 runs`` (a key of one value is not shown); a
-        scenario without a root seed has no seeds factor."""
+        scenario without a root seed has no seeds factor; with ``[design]``, ``sobol design: 64 samples
+        of 4 keys = 640 points (631 distinct) x 2 seeds = 1262 runs``."""
         n_seeds = len(self.seeds) if self.scenario.seed_key is not None else None
+        if self.design is not None:
+            seeds = "" if n_seeds is None else f" x {n_seeds} seed{'s' if n_seeds != 1 else ''}"
+            return f"{self.design.describe()}{seeds} = {len(self.runs)} runs"
         return f"{_factors(self.products, n_seeds)} = {len(self.runs)} runs"
 
 
@@ -457,7 +467,9 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
 
     fixed = _parameters(doc.get("set", {}), scenario, f"{path}: [set]")
     fixed.update(_parameters(dict(changes or {}), scenario, f"{path}: changes"))
-    products = _products(doc.get("grid"), scenario, path)
+    if "design" in doc and "grid" in doc:
+        raise SweepError(f"{path}: give [grid] (values to combine) or [design] (ranges to sample), not both")
+    products = [] if "design" in doc else _products(doc.get("grid"), scenario, path)
     for label, product in products:
         both = [k for k in product if k in fixed]
         if both:
@@ -468,6 +480,15 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
     # without seeds (where the scenario allows it), one run per configuration at the base's seed value
     seeds = None if listed is None and not scenario.seeds_required else _seeds(listed, f"{path}: [sweep] seeds")
     per_point = 1 if seeds is None else len(seeds)
+    design = None
+    if "design" in doc:  # sampled here: its points are checked against the run limit before they are drawn
+        table = doc["design"]
+        ranges = _parameters(table.get("ranges", {}) if isinstance(table, dict) else {}, scenario,
+                             f"{path}: [design.ranges]")
+        design = designs.read_design(table, ranges, scenario, f"{path}: [design]", MAX_RUNS, per_point)
+        both = [k for k in design.keys if k in fixed]
+        if both:
+            raise SweepError(f"{path}: {both[0]} is both fixed ([set] or changes) and in [design.ranges]", both)
     n_runs = sum(math.prod(len(values) for values in product.values()) for _, product in products) * per_point
     if n_runs > MAX_RUNS:
         factors = _factors([product for _, product in products], None if key is None else per_point)
@@ -489,27 +510,29 @@ def sweep_of_document(doc: dict, path: Path, text: str, changes: Mapping[str, An
             scenario.replace(config, {key: seed})
         except ConfigError as error:
             raise SweepError(f"{path}: [sweep] seeds: {error}", error.keys) from None
-    grid_keys = tuple(sorted({k for _, product in products for k in product}))
+    grid_keys = design.keys if design else tuple(sorted({k for _, product in products for k in product}))
     keys = grid_keys if key is None else (*grid_keys, partition_name(scenario, key))
+    # each grid cell, or each distinct point of the design (points that round alike share their run)
+    points = ([("[design]", changes) for changes in design.distinct()] if design else
+              [(label, dict(zip(product, point))) for label, product in products
+               for point in itertools.product(*product.values())])
     runs, given = [], {}   # given: each configuration -> the grid point that gave it first
-    for label, product in products:
-        for point in itertools.product(*product.values()):
-            changes = dict(zip(product, point))
-            where = f"{label} at {', '.join(f'{k} = {_show(v)}' for k, v in changes.items())}"
-            try:
-                at_point = scenario.replace(config, changes)
-            except ConfigError as error:
-                raise SweepError(f"{path}: {where}: {error}", error.keys) from None
-            if at_point in given:
-                raise SweepError(f"{path}: {where} is the configuration of {given[at_point]}: "
-                                 "a sweep runs each configuration once", list(changes))
-            given[at_point] = where
-            runs.extend([Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds] if seeds
-                        else [Run(at_point, keys, scenario)])
+    for label, changes in points:
+        where = f"{label} at {', '.join(f'{k} = {_show(v)}' for k, v in changes.items())}"
+        try:
+            at_point = scenario.replace(config, changes)
+        except ConfigError as error:
+            raise SweepError(f"{path}: {where}: {error}", error.keys) from None
+        if at_point in given:
+            raise SweepError(f"{path}: {where} is the configuration of {given[at_point]}: "
+                             "a sweep runs each configuration once", list(changes))
+        given[at_point] = where
+        runs.extend([Run(scenario.replace(at_point, {key: seed}), keys, scenario) for seed in seeds] if seeds
+                    else [Run(at_point, keys, scenario)])
     values = {k: tuple(dict.fromkeys(run.value(k) for run in runs)) for k in grid_keys}
     return Sweep(path.absolute(), name, scenario, tuple({k: tuple(v) for k, v in product.items()}
                                                        for _, product in products),
-                 values, seeds, runs_per_task, tuple(runs), text)
+                 values, seeds, runs_per_task, tuple(runs), text, design)
 
 
 # --------------------------------------------------------------------------- one run
@@ -1062,6 +1085,8 @@ in what the runs hold (:meth:`Scenario.replicates`; a run of none counts 1). Ret
     with writing(out / LAYOUT_FILE):
         out.mkdir(parents=True, exist_ok=True)
         _record_layout(sweep, out)  # before the first run writes: one layout per dataset from now on
+        if sweep.design is not None:
+            designs.write_samples(sweep.design, out)
     failures = {}
     # what each run holds (its trials or lunar runs; 1 for a delivery run): the progress counts those
     held = {run: len(run.scenario.replicates(run.config) or range(1)) for run in todo}

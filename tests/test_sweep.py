@@ -199,7 +199,8 @@ def test_plan_writes_a_job_array_script(tmp_path, monkeypatch, capsys):
     results = tmp_path / "results"
     sbatch = [line for line in text.splitlines() if line.startswith("#SBATCH")]
     assert sbatch == ["#SBATCH --job-name=dronefleet-smoke", "#SBATCH --array=0-2", "#SBATCH --cpus-per-task=1",
-                      f"#SBATCH --output={results}/smoke/_logs/%A_%a.out", "#SBATCH --time=00:10:00",
+                      "#SBATCH --mem=2G", f"#SBATCH --output={results}/smoke/_logs/%A_%a.out",
+                      "#SBATCH --time=00:10:00",
                       "#SBATCH --partition=short", "#SBATCH --account=lab"]
     assert (results / "smoke" / "_logs").is_dir()  # SLURM does not create it
     assert f"\ncd {tmp_path}\n" in text
